@@ -1,0 +1,94 @@
+"""The stance subphase as a boundary-value problem (section 4.2), with the paper's lock rules.
+
+Unknowns: the F_theta1 step magnitude and the pa offset. Final conditions: theta1 and w reach
+their eq. 3 values at t_step. Lock rules, as events of the forward integration:
+
+- ``leg_too_long``: while theta1 < 0 the telescope may not grow past l1 ("if w > l1 occurs too early
+  ... the stance leg is locked"): an upward crossing of w = l1 locks the leg (wd -> 0).
+- ``leg_vertical``: the lock is removed "as soon as the event theta1 > 0 occurs".
+- The lock "at the desired length towards the end" is the final condition itself: the boundary
+  value solvers reach w = w(eq. 3) exactly at t_step, where the leg then locks (docs/solvers.md).
+
+For multiple shooting the same rule is a path constraint ``l1 - w >= 0`` on the nodes where
+theta1 < 0, imposed only when the square solution breaks it.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from ..dynamics.stance import stance_functions
+from ..solvers.problem import Event, SubphaseSpec
+from .stance_law import (STANCE_CONTEXT, STANCE_FORCES, STANCE_STATE, STANCE_UNKNOWNS, stance_final_conditions,
+                         stance_forces, stance_rhs)
+
+_LOCKED = STANCE_CONTEXT.index["locked"]
+_L1 = STANCE_CONTEXT.index["l1"]
+
+
+
+def lock_rates(mass: np.ndarray, qd: np.ndarray, index: int, rule: str) -> np.ndarray:
+    """Rates just after coordinate ``index`` locks (ERRATA "Velocities at a lock").
+
+    ``"zero"`` zeroes that rate (the paper); ``"momentum"`` applies an impulse in that coordinate
+    only, so the other generalized momenta M qd are conserved.
+    """
+    if rule == "zero":
+        out = np.array(qd, float)
+        out[index] = 0.0
+        return out
+    n = len(qd)
+    unit = np.zeros(n)
+    unit[index] = 1.0
+    kkt = np.block([[mass, -unit[:, None]], [unit[None, :], np.zeros((1, 1))]])
+    return np.linalg.solve(kkt, np.concatenate([mass @ qd, [0.0]]))[:n]
+
+
+def _lock(rule: str):
+    def apply(x, c, mode):
+        mass = np.asarray(stance_functions()["mass_bias"](x[:3], x[3:], c[:16])[0])
+        x = x.copy()
+        x[3:] = lock_rates(mass, x[3:], 0, rule)
+        c = c.copy()
+        c[_LOCKED] = 1.0
+        return x, c, {**mode, "locked": True, "early_lock": True}
+    return apply
+
+
+def _unlock(x, c, mode):
+    c = c.copy()
+    c[_LOCKED] = 0.0
+    return x, c, {**mode, "locked": False}
+
+
+@lru_cache(maxsize=None)
+def stance_spec(lock_rule: str = "momentum") -> SubphaseSpec:
+    """The stance :class:`SubphaseSpec` (built once per lock rule)."""
+    x, t = ca.SX.sym("x", 6), ca.SX.sym("t")
+    u, c = ca.SX.sym("u", 2), ca.SX.sym("c", len(STANCE_CONTEXT))
+    forces, pa = stance_forces(x, t, u, c)
+    args = [x, t, u, c]
+    w_minus_l1 = ca.Function("leg_too_long", args, [x[0] - c[_L1]])
+    theta1 = ca.Function("leg_vertical", args, [x[1]])
+    events = (
+        Event("leg_too_long", w_minus_l1, +1,
+              lambda x, t, c, mode: not mode.get("locked") and not mode.get("early_lock") and x[1] < 0,
+              _lock(lock_rule)),
+        Event("leg_vertical", theta1, +1, lambda x, t, c, mode: bool(mode.get("locked")), _unlock),
+    )
+    return SubphaseSpec(
+        name="stance",
+        state_names=STANCE_STATE.names,
+        unknown_names=STANCE_UNKNOWNS.names,
+        context_names=STANCE_CONTEXT.names,
+        rhs=ca.Function("stance_rhs", args, [stance_rhs(*args)]),
+        final=ca.Function("stance_final", [x, c], [stance_final_conditions(x, c)]),
+        outputs=ca.Function("stance_outputs", args, [ca.vertcat(forces, pa)]),
+        output_names=STANCE_FORCES,
+        path=ca.Function("stance_path", args, [c[_L1] - x[0]]),
+        path_names=("l1_minus_w",),
+        events=events,
+        pairing=((0, 0), (1, 1)),
+    )

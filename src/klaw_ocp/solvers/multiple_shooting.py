@@ -1,0 +1,208 @@
+"""Mode (a): CasADi multiple shooting, solved by ``rootfinder`` (square) or IPOPT (inequalities).
+
+Decision vector, for N intervals and a spec with nx states and nu free parameters:
+
+    z = [X_1, ..., X_N, u_free]        (X_k in R^nx are the node states; X_0 = x0 is a parameter)
+
+Equations: the continuity defects ``X_{k+1} - Phi(X_k, t_k, h_k, u, c)`` for k = 0..N-1 and the
+final conditions ``g(X_N, c)``; Phi is the shared RK4 interval (:mod:`.integrator`). The parameter
+vector ``P = [x0, t_0..t_N, c, u_all]`` carries everything that changes from step to step, so each
+solver is built once per (spec, N, substeps, set of free unknowns) and reused with new P.
+
+- Square problems (as many free unknowns as final conditions) go to ``rootfinder('newton')``.
+- Problems with path inequalities ``h(X_k, t_k, u, c) >= lower_k`` go to IPOPT: the unknowns held
+  fixed in the square problem (e.g. the swing2 hip position actuator) become free, and the
+  objective keeps them as close as possible to their nominal values. This is the OCP form of the
+  paper's recovery loop: instead of raising the actuator in increments until the toe clears, it
+  finds the smallest change that makes it clear.
+"""
+from __future__ import annotations
+
+import time
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .integrator import interval_function, trajectory_function
+from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec
+
+
+def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
+    parts, j = [], 0
+    for i, free in enumerate(free_mask):
+        if free:
+            parts.append(u_free[j])
+            j += 1
+        else:
+            parts.append(u_all[i])
+    return ca.vertcat(*parts)
+
+
+@lru_cache(maxsize=None)
+def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tuple):
+    """Symbols and expressions of the multiple-shooting transcription (built once)."""
+    n, nx = intervals, spec.nx
+    n_free = sum(free_mask)
+    z = ca.SX.sym("z", n * nx + n_free)
+    x0, tn = ca.SX.sym("x0", nx), ca.SX.sym("t", n + 1)
+    c, u_all = ca.SX.sym("c", spec.nc), ca.SX.sym("u_all", spec.nu)
+    params = ca.vertcat(x0, tn, c, u_all)
+    states = ca.reshape(z[: n * nx], nx, n)
+    u = _unknowns(spec, u_all, z[n * nx:], free_mask)
+    previous = ca.horzcat(x0, states[:, : n - 1])
+    step = interval_function(spec, substeps).map(n)
+    propagated = step(previous, tn[:n].T, (tn[1:] - tn[:n]).T, ca.repmat(u, 1, n), ca.repmat(c, 1, n))
+    defects = ca.vec(states - propagated)
+    final = spec.final(states[:, n - 1], c)
+    all_states = ca.horzcat(x0, states)
+    path = None
+    if spec.path is not None:
+        path_map = spec.path.map(n + 1)
+        path = ca.vec(path_map(all_states, tn.T, ca.repmat(u, 1, n + 1), ca.repmat(c, 1, n + 1)).T)
+    return dict(z=z, params=params, defects=defects, final=final, path=path, u=u, u_all=u_all)
+
+
+@lru_cache(maxsize=None)
+def _rootfinder(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tuple, tol: float, max_iter: int):
+    tr = _transcription(spec, intervals, substeps, free_mask)
+    residual = ca.Function(f"{spec.name}_ms_residual", [tr["z"], tr["params"]],
+                           [ca.vertcat(tr["defects"], tr["final"])])
+    return ca.rootfinder(f"{spec.name}_ms_rf", "newton", residual,
+                         {"abstol": tol, "abstolStep": tol * 1e-3, "max_iter": max_iter,
+                          "error_on_fail": False})
+
+
+@lru_cache(maxsize=None)
+def _ipopt(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int):
+    free_mask = tuple(True for _ in range(spec.nu))
+    tr = _transcription(spec, intervals, substeps, free_mask)
+    n_u = spec.nu
+    u_nominal, u_scale = ca.SX.sym("u_nominal", n_u), ca.SX.sym("u_scale", n_u)
+    weights = ca.SX.sym("w", n_u)   # 1 for unknowns held fixed in the square problem
+    deviation = (tr["u"] - u_nominal) / u_scale
+    objective = ca.sumsqr(weights * deviation) + 1e-8 * ca.sumsqr(deviation)
+    g = ca.vertcat(tr["defects"], tr["final"], tr["path"] if tr["path"] is not None else ca.SX(0, 1))
+    nlp = {"x": tr["z"], "p": ca.vertcat(tr["params"], u_nominal, u_scale, weights), "f": objective, "g": g}
+    opts = {"ipopt.tol": tol, "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter * 10,
+            "ipopt.print_level": 0, "print_time": False, "expand": True,
+            "ipopt.sb": "yes", "error_on_fail": False}
+    return ca.nlpsol(f"{spec.name}_ms_ipopt", "ipopt", nlp, opts)
+
+
+class MultipleShootingSolver:
+    """Solve subphases by multiple shooting; see the module docstring for the formulation.
+
+    ``nlp``: "auto" (rootfinder, then IPOPT only if a path inequality is violated), "rootfinder"
+    (never IPOPT; a violated inequality is reported in the message) or "ipopt" (always).
+    """
+
+    name = "multiple-shooting"
+
+    def __init__(self, intervals: int = 20, substeps: int = 4, tolerance: float = 1e-10,
+                 max_iterations: int = 50, nlp: str = "auto"):
+        self.intervals, self.substeps = int(intervals), int(substeps)
+        self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _params(self, pb: SubphaseProblem, u_all) -> np.ndarray:
+        return np.concatenate([pb.x0, pb.grid, pb.context, u_all])
+
+    def _initial_states(self, pb: SubphaseProblem) -> np.ndarray:
+        if pb.state_guess is not None and pb.state_guess.shape == (self.intervals + 1, pb.spec.nx):
+            return np.asarray(pb.state_guess)[1:]
+        traj = trajectory_function(pb.spec, self.substeps, self.intervals)
+        h = np.diff(pb.grid)
+        xs = traj(pb.x0, pb.grid[:-1], h, np.tile(pb.guess[:, None], (1, self.intervals)),
+                  np.tile(pb.context[:, None], (1, self.intervals)))
+        xs = np.asarray(xs).T
+        return np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
+
+    def _finish(self, pb, z, u, iterations, wall0, message, success_hint) -> SubphaseSolution:
+        spec, n = pb.spec, self.intervals
+        states = np.vstack([pb.x0, np.asarray(z[: n * spec.nx]).reshape(n, spec.nx)])
+        # The reported residual is that of the discrete trajectory the solver returns.
+        residual = float(np.max(np.abs(np.asarray(spec.final(states[-1], pb.context)))))
+        step = interval_function(spec, self.substeps)
+        defect = max(float(np.max(np.abs(np.asarray(step(states[k], pb.grid[k], pb.grid[k + 1] - pb.grid[k], u,
+                                                              pb.context)).ravel() - states[k + 1])))
+                     for k in range(n))
+        forces = np.array([np.asarray(spec.outputs(states[k], pb.grid[k], u, pb.context)).ravel()
+                           for k in range(n + 1)])
+        path_min = _path_margin(pb, states, u)
+        ok = success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9) and np.all(np.isfinite(states))
+        msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
+        return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
+                                states, forces, max(residual, defect), iterations, bool(ok),
+                                time.perf_counter() - wall0, msg, path_min)
+
+    # -- the two NLP forms ---------------------------------------------------------------------
+    def _solve_square(self, pb: SubphaseProblem, wall0: float) -> SubphaseSolution:
+        spec, n = pb.spec, self.intervals
+        free_mask = tuple(not f for f in pb.fixed)
+        rf = _rootfinder(spec, n, self.substeps, free_mask, self.tolerance, self.max_iterations)
+        z0 = np.concatenate([self._initial_states(pb).ravel(), pb.guess[list(free_mask)]])
+        z = np.asarray(rf(z0, self._params(pb, pb.guess))).ravel()
+        stats = rf.stats()
+        u = pb.guess.copy()
+        u[list(free_mask)] = z[n * spec.nx:]
+        return self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), wall0,
+                            "", bool(stats.get("success", True)))
+
+    def _solve_ipopt(self, pb: SubphaseProblem, wall0: float, start: SubphaseSolution | None) -> SubphaseSolution:
+        spec, n = pb.spec, self.intervals
+        solver = _ipopt(spec, n, self.substeps, self.tolerance, self.max_iterations)
+        if start is not None and np.all(np.isfinite(start.states)):
+            z0 = np.concatenate([start.states[1:].ravel(), [start.parameters[k] for k in spec.unknown_names]])
+        else:
+            z0 = np.concatenate([self._initial_states(pb).ravel(), pb.guess])
+        weights = np.array([1.0 if f else 0.0 for f in pb.fixed])
+        params = np.concatenate([self._params(pb, pb.guess), pb.guess, pb.scale, weights])
+        n_eq = n * spec.nx + spec.final.size1_out(0)
+        lbg = np.zeros(n_eq)
+        ubg = np.zeros(n_eq)
+        if spec.path is not None:
+            lower = pb.path_lower if pb.path_lower is not None else np.full((n + 1, len(spec.path_names)), -np.inf)
+            lbg = np.concatenate([lbg, lower.T.ravel()])
+            ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
+        sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
+        stats = solver.stats()
+        z = np.asarray(sol["x"]).ravel()
+        u = z[n * spec.nx:]
+        result = self._finish(pb, z, u, int(stats.get("iter_count", 0)), wall0,
+                              "" if stats.get("success") else str(stats.get("return_status")),
+                              bool(stats.get("success")))
+        if result.path_min < -1e-7:
+            result.success = False
+            result.message = f"path constraint violated by {-result.path_min:.3g}"
+        return result
+
+    def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
+        wall0 = time.perf_counter()
+        if pb.grid.size != self.intervals + 1:
+            raise ValueError(f"{pb.spec.name}: grid has {pb.grid.size - 1} intervals, solver {self.intervals}")
+        has_path = pb.spec.path is not None and pb.path_lower is not None
+        if self.nlp == "ipopt" and has_path:
+            return self._solve_ipopt(pb, wall0, None)
+        result = self._solve_square(pb, wall0)
+        if has_path and result.path_min < 0:
+            if self.nlp == "rootfinder":
+                result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"
+                return result
+            return self._solve_ipopt(pb, wall0, result if result.success else None)
+        return result
+
+
+def _path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
+    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality).
+
+    Samples off the grid (event nodes of plain shooting) use the bound of the node before them.
+    """
+    spec = pb.spec
+    if spec.path is None or pb.path_lower is None:
+        return float("inf")
+    times = pb.grid if times is None else np.asarray(times)
+    node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
+    margins = [np.asarray(spec.path(states[k], times[k], u, pb.context)).ravel() - pb.path_lower[node[k]]
+               for k in range(len(times))]
+    return float(np.min(margins))

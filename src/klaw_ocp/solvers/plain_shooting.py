@@ -1,0 +1,247 @@
+"""Mode (b): plain shooting with bisection then secant, the paper's own method (section 4.1).
+
+"The approximation of F is performed in two stages. First, the Bisection method computes a
+reasonable approximation which is then refined by the Secant method." Each free unknown is paired
+with one final condition (``spec.pairing``: F_theta1 with theta1, pa with w, ...). With one unknown
+that is the paper's method as written; with two, the 1-D solves alternate (Gauss-Seidel sweeps)
+until both conditions hold, because the paper does not say how it coupled them.
+
+Forward integration uses the same RK4 interval as multiple shooting, node by node, and watches
+the spec's events (the stance leg's lock and unlock): a sign change inside an interval is located
+by the secant method on the partial interval, the event's switch is applied there and the
+integration goes on. The recovery loop of swing2 is ``recovery_step``: while a path inequality
+(toe clearance) is violated, the unknown it names is raised by one increment and the free
+unknowns are solved again.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from functools import lru_cache
+
+from .integrator import interval_function, trajectory_function
+from .multiple_shooting import _path_margin
+from .problem import SubphaseProblem, SubphaseSolution
+
+
+class PlainShootingSolver:
+    """Forward shooting; see the module docstring. ``max_iterations`` bounds the shots per 1-D solve."""
+
+    name = "plain-shooting"
+
+    def __init__(self, intervals: int = 20, substeps: int = 4, tolerance: float = 1e-10,
+                 max_iterations: int = 60, bisection_steps: int = 4, max_sweeps: int = 40,
+                 max_recovery_steps: int = 200):
+        self.intervals, self.substeps = int(intervals), int(substeps)
+        self.tolerance, self.max_iterations = float(tolerance), int(max_iterations)
+        self.bisection_steps, self.max_sweeps = int(bisection_steps), int(max_sweeps)
+        self.max_recovery_steps = int(max_recovery_steps)
+        self.shots = 0
+
+    # -- forward integration with events --------------------------------------------------------
+    def simulate(self, pb: SubphaseProblem, u: np.ndarray):
+        """Integrate from x0 with parameters u; returns (times, states, context, event log).
+
+        The whole grid is first integrated in one call; only if an armed event changes sign on it
+        does the integration go on node by node from the interval before that change.
+        """
+        spec = pb.spec
+        self.shots += 1
+        n = pb.grid.size - 1
+        traj = trajectory_function(spec, self.substeps, n)
+        fast = np.asarray(traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, n)),
+                               np.tile(pb.context[:, None], (1, n)))).T
+        states = np.vstack([pb.x0, fast])
+        start = self._first_sign_change(spec, pb, states, u)
+        if start is None:
+            return pb.grid.copy(), states, pb.context.copy(), []
+        step = interval_function(spec, self.substeps)
+        c, mode = pb.context.copy(), {}
+        x = states[start].copy()
+        times, out, log = list(pb.grid[: start + 1]), list(states[: start + 1]), []
+        for k in range(start, n):
+            t0, t1 = pb.grid[k], pb.grid[k + 1]
+            while True:
+                x1 = np.asarray(step(x, t0, t1 - t0, u, c)).ravel()
+                hit = self._first_event(spec, pb, x, t0, x1, t1, u, c, mode)
+                if hit is None:
+                    break
+                event, h = hit
+                x = np.asarray(step(x, t0, h, u, c)).ravel()
+                t0 = t0 + h
+                x, c, mode = event.apply(x, c, mode)
+                times.append(t0)
+                out.append(x.copy())
+                log.append((event.name, float(t0)))
+            x = x1
+            times.append(t1)
+            out.append(x.copy())
+            if not np.all(np.isfinite(x)):
+                break
+        return np.array(times), np.array(out), c, log
+
+    def _first_sign_change(self, spec, pb, states, u):
+        """Index of the first interval on which an event armed in the initial mode fires."""
+        first = None
+        for event in spec.events:
+            values = np.array([float(event.fn(states[k], pb.grid[k], u, pb.context)) for k in range(len(states))]) \
+                if len(states) < 3 else np.asarray(_mapped(event, len(states))(
+                    states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
+                    np.tile(pb.context[:, None], (1, len(states))))).ravel()
+            d = event.direction
+            for k in range(len(states) - 1):
+                if first is not None and k >= first:
+                    break
+                if values[k] * d < 0 <= values[k + 1] * d and event.guard(states[k], pb.grid[k], pb.context, {}):
+                    first = k
+                    break
+        return first
+
+    def _first_event(self, spec, pb, x0, t0, x1, t1, u, c, mode):
+        best = None
+        for event in spec.events:
+            if not event.guard(x0, t0, c, mode):
+                continue
+            g0 = float(event.fn(x0, t0, u, c))
+            g1 = float(event.fn(x1, t1, u, c))
+            if not (g0 * event.direction < 0 <= g1 * event.direction):
+                continue
+            h = self._locate(spec, event, x0, t0, t1 - t0, g0, g1, u, c)
+            if best is None or h < best[1]:
+                best = (event, h)
+        return best
+
+    def _locate(self, spec, event, x0, t0, h, g0, g1, u, c):
+        step = interval_function(spec, self.substeps)
+        a, b, ga, gb = 0.0, h, g0, g1
+        for _ in range(60):
+            m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
+            if not a < m < b:
+                m = 0.5 * (a + b)
+            gm = float(event.fn(step(x0, t0, m, u, c), t0 + m, u, c))
+            if abs(gm) < 1e-13 or b - a < 1e-14:
+                return m
+            if gm * ga < 0:
+                b, gb = m, gm
+            else:
+                a, ga = m, gm
+        return 0.5 * (a + b)
+
+    def _final(self, pb, u):
+        times, states, c, log = self.simulate(pb, u)
+        if not np.all(np.isfinite(states[-1])):
+            return np.full(pb.spec.final.size1_out(0), np.inf), (times, states, c, log)
+        return np.asarray(pb.spec.final(states[-1], c)).ravel(), (times, states, c, log)
+
+    # -- bisection, then secant -------------------------------------------------------------
+    def _solve_1d(self, f, x0: float, scale: float, tol: float, probe: float):
+        """Root of a scalar f near x0: bracket, a few bisections, then the secant method.
+
+        ``probe`` is the first trial step (the size of the last change of this unknown, so that
+        later sweeps bracket tightly around a root they already nearly have).
+        """
+        shots = 0
+        f0 = f(x0); shots += 1
+        if abs(f0) <= tol:
+            return x0, f0, shots
+        delta = probe or abs(scale) * 0.05 or 1.0
+        f1 = f(x0 + delta); shots += 1
+        slope = (f1 - f0) / delta
+        direction = -np.sign(f0 * slope) if np.isfinite(slope) and slope != 0 else 1.0
+        a, fa = x0, f0
+        step = delta
+        b, fb = x0 + direction * step, f(x0 + direction * step); shots += 1
+        while fa * fb > 0 and shots < self.max_iterations:
+            a, fa = b, fb
+            step *= 2.0
+            b = x0 + direction * step
+            fb = f(b); shots += 1
+        if fa * fb > 0 or not np.isfinite(fb):
+            return (a if abs(fa) < abs(fb) else b), min(fa, fb, key=abs), shots
+        # bisection only until the bracket is a "reasonable approximation" (2 % of the scale)
+        for _ in range(self.bisection_steps):
+            if abs(b - a) <= 0.02 * abs(scale):
+                break
+            m = 0.5 * (a + b); fm = f(m); shots += 1
+            if fa * fm <= 0:
+                b, fb = m, fm
+            else:
+                a, fa = m, fm
+        # secant, kept inside the bracket (a bisection step whenever it would leave it)
+        x_prev, f_prev, x, fx = a, fa, b, fb
+        while abs(fx) > tol and shots < self.max_iterations:
+            x_new = x - fx * (x - x_prev) / (fx - f_prev) if fx != f_prev else 0.5 * (a + b)
+            lo, hi = min(a, b), max(a, b)
+            if not lo < x_new < hi:
+                x_new = 0.5 * (a + b)
+            f_new = f(x_new); shots += 1
+            if fa * f_new <= 0:
+                b, fb = x_new, f_new
+            else:
+                a, fa = x_new, f_new
+            x_prev, f_prev, x, fx = x, fx, x_new, f_new
+            if abs(b - a) < 1e-15 * max(1.0, abs(x)):
+                break
+        return x, fx, shots
+
+    def _solve_free(self, pb: SubphaseProblem, u: np.ndarray):
+        """Gauss-Seidel sweeps of 1-D solves over the (unknown, condition) pairs."""
+        shots = 0
+        pairs = [(i, j) for i, j in pb.spec.pairing if not pb.fixed[i]]
+        residual = self._final(pb, u)[0]
+        shots += 1
+        probes = {i: 0.0 for i, _ in pairs}
+        for _ in range(self.max_sweeps):
+            worst = float(np.max(np.abs(residual)))
+            if worst <= self.tolerance:
+                break
+            # inexact sweeps: each 1-D solve only needs to beat the current coupling error
+            tol = max(self.tolerance, 0.01 * worst) if len(pairs) > 1 else self.tolerance
+            for i, j in pairs:
+                def f(value, i=i, j=j):
+                    trial = u.copy(); trial[i] = value
+                    return float(self._final(pb, trial)[0][j])
+                old = u[i]
+                u[i], _, n = self._solve_1d(f, u[i], pb.scale[i], tol, min(2 * probes[i], 0.05 * abs(pb.scale[i])))
+                probes[i] = abs(u[i] - old) or 1e-6 * abs(pb.scale[i])
+                shots += n
+            residual = self._final(pb, u)[0]
+            shots += 1
+        return u, residual, shots
+
+    def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
+        wall0 = time.perf_counter()
+        u = pb.guess.copy()
+        u, residual, shots = self._solve_free(pb, u)
+        recovery = 0
+        if pb.recovery_step is not None and pb.path_lower is not None:
+            while recovery < self.max_recovery_steps:
+                times, states, _, _ = self.simulate(pb, u)
+                if _path_margin(pb, states, u, times) >= 0:
+                    break
+                u = u + np.asarray(pb.recovery_step)
+                u, residual, n = self._solve_free(pb, u)
+                shots += n + 1
+                recovery += 1
+        times, states, c, log = self.simulate(pb, u)
+        residual = np.asarray(pb.spec.final(states[-1], c)).ravel()
+        res = float(np.max(np.abs(residual))) if np.all(np.isfinite(residual)) else float("inf")
+        forces = np.array([np.asarray(pb.spec.outputs(states[k], times[k], u, c)).ravel()
+                           for k in range(len(times))])
+        path_min = _path_margin(pb, states, u, times)
+        ok = res <= max(10 * self.tolerance, 1e-9) and path_min >= -1e-7
+        msg = "" if ok else (f"residual {res:.3g}" + (f", path constraint violated by {-path_min:.3g}"
+                                                       if path_min < -1e-7 else ""))
+        if recovery:
+            msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
+        return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
+                                times, states, forces, res, shots, bool(ok), time.perf_counter() - wall0,
+                                msg if not ok or recovery else "", path_min, log)
+
+
+
+@lru_cache(maxsize=None)
+def _mapped(event, n):
+    return event.fn.map(n)

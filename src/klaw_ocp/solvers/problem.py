@@ -1,0 +1,160 @@
+"""What a subphase boundary-value problem is, independent of how it is solved (section 4.1).
+
+    A(q) qdd = B(q, qd, F(t, x; u)),   x(t0) = x0,   g(x(t_end)) = 0,   h(x(t), t) >= 0
+
+A :class:`SubphaseSpec` is the symbolic structure, built once per process by ``klaw_ocp.control``:
+the closed-loop right-hand side ``rhs(x, t, u, c)``, the final conditions ``final(x_end, c)``, optional
+path functions ``path(x, t, u, c) >= 0`` and the forces to report. ``u`` are the few free
+parameters of the paper's torque shapes; ``c`` is a numeric context (body, gains, targets) that
+each step fills in, so one compiled Function serves every step.
+
+A :class:`SubphaseProblem` is one numeric instance: initial state, time grid, context, guess.
+A :class:`SubphaseSolution` is what every solver returns, converged or not (scipy-style: a failed
+solve comes back with ``success = False`` and a message, it does not raise midway).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Event:
+    """A state event for forward integration (plain shooting): ``fn(x, t, u, c)`` crossing zero.
+
+    ``direction`` +1 fires on an upward crossing, -1 downward. ``guard(x, t, c_dict, mode)`` says
+    whether the event is armed; ``apply(x, c, mode) -> (x, c, mode)`` is the switch (a lock map).
+    """
+    name: str
+    fn: ca.Function
+    direction: int
+    guard: Callable
+    apply: Callable
+
+
+@dataclass(frozen=True)
+class SubphaseSpec:
+    """Symbolic structure of one subphase (built once; see module docstring).
+
+    Dimensions: nx states, nu free parameters, nc context entries, nf final conditions (= nu for
+    a square problem), nh path functions.
+    """
+    name: str
+    state_names: tuple
+    unknown_names: tuple
+    context_names: tuple
+    rhs: ca.Function                 # (x[nx], t, u[nu], c[nc]) -> xdot[nx]
+    final: ca.Function               # (x[nx], c[nc]) -> g[nf]
+    outputs: ca.Function             # (x, t, u, c) -> reported forces [no]
+    output_names: tuple
+    path: Optional[ca.Function] = None   # (x, t, u, c) -> h[nh] >= 0
+    path_names: tuple = ()
+    events: tuple = ()
+    #: pairs (unknown index, final-condition index) for the paper's one-unknown-at-a-time shooting
+    pairing: tuple = ()
+
+    @property
+    def nx(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def nu(self) -> int:
+        return len(self.unknown_names)
+
+    @property
+    def nc(self) -> int:
+        return len(self.context_names)
+
+
+@dataclass
+class SubphaseProblem:
+    """One numeric instance of a :class:`SubphaseSpec`.
+
+    ``grid`` holds the N+1 node times (breakpoints of the torque shapes must be nodes).
+    ``guess`` the initial free parameters; ``scale`` their typical size (for brackets and
+    tolerances). ``fixed`` marks unknowns held at their guess unless the solver needs them to
+    satisfy path constraints (the swing2 recovery actuator). ``path_lower`` are lower bounds of
+    the path functions (e.g. the toe clearance); ``None`` means no inequality is enforced.
+    """
+    spec: SubphaseSpec
+    x0: np.ndarray
+    grid: np.ndarray
+    context: np.ndarray
+    guess: np.ndarray
+    scale: np.ndarray
+    fixed: Sequence[bool] = ()
+    path_lower: Optional[np.ndarray] = None      # (nh,) or (N+1, nh); -inf disables a node
+    recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
+    state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
+    step: int = -1
+
+    def __post_init__(self):
+        self.x0 = np.asarray(self.x0, float).ravel()
+        self.grid = np.asarray(self.grid, float).ravel()
+        self.context = np.asarray(self.context, float).ravel()
+        self.guess = np.asarray(self.guess, float).ravel()
+        self.scale = np.asarray(self.scale, float).ravel()
+        if not self.fixed:
+            self.fixed = tuple(False for _ in range(self.spec.nu))
+        if self.path_lower is not None:
+            lower = np.asarray(self.path_lower, float)
+            self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
+        if np.any(np.diff(self.grid) <= 0):
+            raise ValueError(f"{self.spec.name}: time grid must increase strictly")
+
+
+@dataclass
+class SubphaseSolution:
+    """The result of any solver for one subphase.
+
+    ``parameters`` maps unknown names to values; ``t`` (N+1) and ``states`` (N+1, nx) sample the
+    trajectory; ``forces`` (N+1, no) the reported forces; ``residual`` is the maximum absolute
+    final-condition error; ``path_min`` the smallest path-function margin (>= 0 when satisfied).
+    """
+    name: str
+    method: str
+    parameters: dict
+    t: np.ndarray
+    states: np.ndarray
+    forces: np.ndarray
+    residual: float
+    iterations: int
+    success: bool
+    wall_s: float
+    message: str = ""
+    path_min: float = float("inf")
+    events: list = field(default_factory=list)
+
+    @property
+    def status(self) -> str:
+        return "ok" if self.success else "failed"
+
+    @property
+    def final_state(self) -> np.ndarray:
+        return self.states[-1]
+
+
+def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -> np.ndarray:
+    """N+1 nodes from t0 to t1 with every breakpoint inside (t0, t1) on a node.
+
+    The nodes are distributed over the segments in proportion to their length (at least one
+    interval each), so the number of intervals, and hence the compiled solver, never changes.
+    """
+    cuts = sorted(b for b in breakpoints if t0 + 1e-9 < b < t1 - 1e-9)
+    edges = [t0, *cuts, t1]
+    lengths = np.diff(edges)
+    if n < len(lengths):
+        raise ValueError(f"need at least {len(lengths)} intervals for {len(cuts)} breakpoints, got {n}")
+    counts = np.maximum(1, np.floor(lengths / (t1 - t0) * n).astype(int))
+    while counts.sum() < n:
+        counts[np.argmax(lengths / counts)] += 1
+    while counts.sum() > n:
+        candidates = np.where(counts > 1)[0]
+        counts[candidates[np.argmin((lengths / counts)[candidates])]] -= 1
+    nodes = [t0]
+    for a, b, k in zip(edges[:-1], edges[1:], counts):
+        nodes.extend(np.linspace(a, b, k + 1)[1:])
+    return np.array(nodes)
