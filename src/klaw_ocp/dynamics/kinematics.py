@@ -1,0 +1,98 @@
+"""Forward kinematics of the dynamic models and the kinematic foot (sections 2.3, 3, 4.3; figures 2, 5-7).
+
+Serves ground-clearance constraints, plots and the animation. Positions are in the world frame
+(x forward, y up, metres); the models' own conventions are those of :mod:`.stance` and
+:mod:`.swing` (ERRATA "Conventions").
+
+The foot (figures 5 and 6, Table B-1 rows 8-13), for a shank of absolute angle
+``phi`` (``phi = theta3 + theta4`` for the swing leg), so that the ankle->knee unit vector is
+``u = (sin phi, cos phi)``:
+
+- ``u_b``: the backward sole direction, ``u`` rotated counter-clockwise by ``theta5``. theta5 is the
+  angle between the leg axis and the foot's long axis, so 90 deg is a neutral ankle: a vertical
+  shank then has a horizontal sole (ERRATA "Open choices", theta5).
+- ``u_f = -u_b`` the forward sole direction, ``n`` = ``u_f`` rotated CCW by 90 deg (the foot's "up").
+- ``heel = ankle + l8 u_b - l9 n`` (l8: heel to the ankle's projection on the sole, l9: ankle height).
+- ``metatarsal = ankle + sqrt(l12^2 - l9^2) u_f - l9 n`` (l12 is the ankle to 1st metatarsal head
+  *distance*, so its projection on the sole is the square root).
+- ``toe = metatarsal + l13 * (u_f rotated CCW by theta6)``; theta6 is the toe dorsiflexion at the
+  metatarsophalangeal joint (positive lifts the toe tip relative to the sole).
+
+Check: vertical shank, theta5 = 90 deg, ankle (0, l9) -> heel (-l8, 0), sole and toe on y = 0.
+"""
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from ._checks import as_scalar, as_vector, check_body, to_numpy
+from .stance import stance_functions
+from .swing import swing_functions
+
+
+def _rotate_ccw(v, angle):
+    c, s = ca.cos(angle), ca.sin(angle)
+    return ca.vertcat(c * v[0] - s * v[1], s * v[0] + c * v[1])
+
+
+def foot_points_sx(ankle, shank_angle, theta5, theta6, l8, l9, l12, l13) -> dict:
+    """Heel, metatarsal head and toe tip of the kinematic foot (see the module docstring).
+
+    Works with CasADi SX/MX symbols and with plain floats (then the points are 2x1 DM).
+    """
+    ankle = ca.vertcat(ankle[0], ankle[1])
+    u = ca.vertcat(ca.sin(shank_angle), ca.cos(shank_angle))
+    u_b = _rotate_ccw(u, theta5)
+    u_f = -u_b
+    n = ca.vertcat(-u_f[1], u_f[0])  # u_f rotated CCW by 90 deg
+    heel = ankle + l8 * u_b - l9 * n
+    metatarsal = ankle + ca.sqrt(l12 ** 2 - l9 ** 2) * u_f - l9 * n
+    toe = metatarsal + l13 * _rotate_ccw(u_f, theta6)
+    return {"heel": heel, "metatarsal": metatarsal, "toe": toe}
+
+
+def foot_points(body, ankle, shank_angle, theta5, theta6=0.0) -> dict:
+    """Numeric :func:`foot_points_sx` for a :class:`~klaw_ocp.body.Body`: ``{heel, metatarsal, toe}``."""
+    body = check_body(body)
+    ankle = as_vector("ankle", ankle, 2)
+    pts = foot_points_sx(ankle, as_scalar("shank_angle", shank_angle), as_scalar("theta5", theta5),
+                         as_scalar("theta6", theta6), body.l8, body.l9, body.l12, body.l13)
+    return {k: to_numpy(v) for k, v in pts.items()}
+
+
+def swing_leg_points(body, q, hip, theta5=math.pi / 2, theta6=0.0) -> dict:
+    """World positions of the swing leg: ``hip, knee, ankle, heel, metatarsal, toe`` (2-arrays).
+
+    ``q = [theta3, theta4]`` (rad), ``hip`` the world hip position (m); ``theta5``/``theta6`` the
+    kinematic foot angles (rad), neutral by default.
+    """
+    body = check_body(body)
+    q = as_vector("q", q, 2)
+    hip = as_vector("hip", hip, 2)
+    knee, ankle = (to_numpy(v) for v in swing_functions()["points"](q, hip, body.dynamic_parameters()))
+    out = {"hip": hip, "knee": knee, "ankle": ankle}
+    out.update(foot_points(body, ankle, q[0] + q[1], theta5, theta6))
+    return out
+
+
+def stance_hip(body, x_stance, ankle):
+    """World hip position and velocity ``(pos, vel)`` of the stance state
+    ``x = [w, theta1, theta2, wd, theta1d, theta2d]`` whose ankle is at world ``ankle``.
+    """
+    check_body(body)
+    x = as_vector("x_stance", x_stance, 6)
+    ankle = as_vector("ankle", ankle, 2)
+    pos, vel, _ = stance_functions()["hip"](x[:3], x[3:], np.zeros(3))
+    return ankle + to_numpy(pos), to_numpy(vel)
+
+
+def upper_body_com(body, q_stance, ankle):
+    """World position ``(x, y)`` of the upper-body (head-arms-trunk) centre of mass."""
+    body = check_body(body)
+    q = as_vector("q_stance", q_stance, 3)
+    ankle = as_vector("ankle", ankle, 2)
+    _, _, trunk = stance_functions()["points"](q, body.dynamic_parameters())
+    x, y = ankle + to_numpy(trunk)
+    return float(x), float(y)
