@@ -1,0 +1,294 @@
+"""Locomotion attributes: the numbers that individualise a walk (section 3 and section 5).
+
+The paper calls them *locomotion attributes* (up to 28 of them): the anatomical limits that eq. 1
+is checked against (section 3, e.g. ``sf_max = 182 steps/min``), the ankle and metatarsal angles
+at heel strike (section 4.3), the foot-period limits (section 4.2), the swing curve P (section
+4.3), the spring and damping constants of the stance and swing controllers and the determinants
+of gait (section 4.2). The paper gives few of their values; where it is silent the value is our
+choice and the spec says so (see docs/paper-map.md and docs/attributes.md).
+
+One registry, :data:`ATTRIBUTES`, holds every attribute's unit, default, allowed range and the
+paper passage it comes from. :class:`LocomotionAttributes` is an immutable set of values checked
+against that registry. Angles are stored in degrees, as users write them; :meth:`LocomotionAttributes.rad`
+converts for the equations, which work in radians.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+from ..errors import ConfigError, out_of_range
+
+_OURS = "not in the paper; our choice, see docs/paper-map.md"
+
+
+@dataclass(frozen=True)
+class AttributeSpec:
+    """One locomotion attribute: its unit, default and inclusive allowed range [low, high].
+
+    ``paper`` quotes the passage the attribute comes from, or says that the value is our choice.
+    Units: ``deg`` angles (converted with :meth:`LocomotionAttributes.rad`), ``l1`` a multiple of
+    the leg length ``Body.l1``, ``l1/(km/h)`` a multiple of l1 per km/h, ``1`` a plain fraction.
+    """
+
+    name: str
+    unit: str
+    default: float
+    low: float
+    high: float
+    paper: str
+    group: str = ""
+
+    def check(self, value) -> float:
+        """Return ``value`` as a float, or raise ConfigError naming ``attributes.<name>``."""
+        field = f"attributes.{self.name}"
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ConfigError(out_of_range(field, value, f"a number in {self.unit}"))
+        value = float(value)
+        if not math.isfinite(value) or not self.low <= value <= self.high:
+            raise ConfigError(out_of_range(field, value, f"{self.low:g} to {self.high:g} {self.unit}"))
+        return value
+
+
+def _spec(group, name, unit, default, low, high, paper):
+    return AttributeSpec(name=name, unit=unit, default=default, low=low, high=high, paper=paper,
+                         group=group)
+
+
+_SPECS = [
+    # -- limits that the completed locomotion parameters must respect (section 3, eq. 1)
+    _spec("limits", "sf_max", "steps/min", 182.0, 60.0, 240.0,
+          "§3: anatomical limit, 'e.g. sf_max = 182 steps/min'"),
+    _spec("limits", "sf_min", "steps/min", 30.0, 1.0, 120.0, _OURS),
+    _spec("limits", "speed_min", "km/h", 0.5, 0.01, 5.0,
+          "§3 'within anatomical limits defined by locomotion attributes'; value " + _OURS),
+    _spec("limits", "speed_max", "km/h", 9.0, 1.0, 15.0,
+          "§3 'within anatomical limits'; value " + _OURS + " (walking turns to running near 9 km/h)"),
+    _spec("limits", "step_length_max_rel", "l1", 1.4, 0.5, 2.5,
+          "§3 'within anatomical limits'; maximum step length relative to leg length, " + _OURS),
+    _spec("limits", "step_length_min_rel", "l1", 0.2, 0.01, 1.0, _OURS),
+    _spec("limits", "parameter_consistency_tolerance", "1", 0.01, 1e-6, 0.2,
+          "§3 v = sl·sf must hold when all three are given; relative tolerance " + _OURS),
+    # -- timing (section 4.2, 4.3)
+    _spec("timing", "swing1_end_fraction", "1", 0.5, 0.2, 0.8,
+          "§4.3: swing1 ends 'at about 50 % of the time for the swing'"),
+    _spec("timing", "swing2_end_fraction", "1", 0.85, 0.5, 0.98,
+          "§4.3: swing2 ends 'about 85 % into the swing'"),
+    _spec("timing", "theta1_torque_off_fraction", "1", 0.4, 0.05, 1.0,
+          "§4.2: F_θ1 is 'a step input torque which is turned off at 0.4·t_step'"),
+    # -- step symmetry and the kinematic foot (section 3, eq. 3; section 4.2, 4.3)
+    _spec("foot", "theta5_impact", "deg", 90.0, 60.0, 120.0,
+          "§3 eq. 3: 'θ5 at impact is specified as one of the locomotion attributes'; ERRATA open "
+          "choice: angle between leg axis and the foot's long axis, neutral ≈ 90°"),
+    _spec("foot", "theta6_impact", "deg", 0.0, -30.0, 30.0,
+          "§4.3: the metatarsal angle at heel strike is 'specified as locomotion attributes'"),
+    _spec("foot", "heel_off_theta5", "deg", 80.0, 60.0, 110.0,
+          "§4.2: 'the normal period ends when the ankle angle θ5 reaches a limiting value'"),
+    _spec("foot", "meta_off_theta6", "deg", 30.0, 0.0, 60.0,
+          "§4.2: 'as soon as θ6 reaches a limit, the meta-off period is entered'"),
+    _spec("foot", "toe_off_foot_pitch", "deg", 45.0, 10.0, 80.0,
+          "§4.2 meta-off ends at toe-off; the foot pitch there is " + _OURS),
+    # -- swing (section 4.3)
+    _spec("swing", "toe_clearance", "m", 0.015, 0.0, 0.1,
+          "§4.3 swing2 recovery 'until the foot clears the ground'; toe clearance is one of the "
+          "paper's attributes, value " + _OURS),
+    _spec("swing", "swing_peak_position", "1", 0.3, 0.1, 0.7,
+          "§4.3 curve P: 'C amounts to about 30% of the value for D'"),
+    _spec("swing", "ankle_peak_height_rel", "l1", 0.20, 0.02, 0.5,
+          "§4.3 curve P: a_max 'chosen somewhat arbitrarily'; a_max at 0 km/h, " + _OURS),
+    _spec("swing", "ankle_peak_height_speed_slope", "l1/(km/h)", 0.01, 0.0, 0.05,
+          "§4.3 curve P: 'the faster the walk, the smaller a_max'; slope " + _OURS),
+    _spec("swing", "swing1_torque_time_constant", "1", 0.3, 0.02, 5.0,
+          "§4.3: swing1 hip torque is 'a decaying exponential function'; time constant as a "
+          "fraction of the swing1 duration, " + _OURS),
+    _spec("swing", "swing2_knee_time_constant", "1", 0.3, 0.02, 5.0,
+          "§4.3: swing2 knee torque 'is a decaying exponential function'; time constant as a "
+          "fraction of the swing2 duration, " + _OURS),
+    _spec("swing", "hip_hold_frequency", "Hz", 2.0, 0.1, 20.0,
+          "§4.3 swing2: hip torque 'a spring and damping model to hold the thigh in place'; "
+          "natural frequency " + _OURS),
+    _spec("swing", "hip_hold_damping_ratio", "1", 0.7, 0.0, 5.0,
+          "§4.3 swing2 hip spring-damper; damping ratio " + _OURS),
+    # -- stance (section 4.2, eq. 4)
+    _spec("stance", "leg_frequency", "Hz", 3.0, 0.1, 20.0,
+          "§4.2 eq. 4 (lost, ERRATA 8): F_w spring k_w; natural frequency " + _OURS),
+    _spec("stance", "leg_damping_ratio", "1", 0.3, 0.0, 5.0,
+          "§4.2 eq. 4: F_w damper v_w; damping ratio " + _OURS),
+    _spec("stance", "trunk_frequency", "Hz", 1.5, 0.1, 20.0,
+          "§4.2: 'the upper body is balanced by the torque F_θ2 … a simple spring and damping "
+          "model'; natural frequency " + _OURS),
+    _spec("stance", "trunk_damping_ratio", "1", 0.8, 0.0, 5.0,
+          "§4.2 F_θ2 spring-damper; damping ratio " + _OURS),
+    _spec("stance", "trunk_lean", "deg", 0.0, -30.0, 30.0,
+          "§4.2 F_θ2 spring rest angle (θ2 > 0 leans forward); " + _OURS),
+    _spec("stance", "hip_height_gain", "m/m", 1.0, 0.0, 100.0,
+          "§4.2: 'if it drops too low, pa is increased'; gain of pa on the hip-height error, " + _OURS),
+    _spec("stance", "hip_height_rate_gain", "s", 0.05, 0.0, 10.0,
+          "§4.2 pa monitoring; gain on the hip vertical velocity, " + _OURS),
+    _spec("stance", "midstance_leg_shortening", "l1", 0.01, 0.0, 0.2,
+          "§4.2: 'the leg does not shorten much after heel strike'; target shortening, " + _OURS),
+    _spec("stance", "min_hip_excursion_rel", "l1", 0.01, 0.0, 0.2,
+          "§4.2: the hip 'prescribes a vertical sinusoidal curve'; minimum excursion, " + _OURS),
+    # -- determinants of gait and upper body (section 4.2, 2.4 principle 3)
+    _spec("determinants", "pelvic_rotation", "deg", 4.0, 0.0, 20.0,
+          "§4.2: pelvic rotation (transverse plane), maximum at heel strike; value " + _OURS),
+    _spec("determinants", "pelvic_list", "deg", 5.0, 0.0, 20.0,
+          "§4.2, fig. 9: pelvic list (coronal plane), maximum at mid-step; value " + _OURS),
+    _spec("determinants", "pelvic_lateral_shift", "m", 0.02, 0.0, 0.1,
+          "§4.2: lateral displacement, 'a maximum shortly after toe-off'; value " + _OURS),
+    _spec("determinants", "foot_lateral_distance", "m", 0.08, 0.0, 0.4,
+          "§5 attributes: lateral distance between the feet; value " + _OURS),
+    _spec("determinants", "arm_swing_amplitude", "deg", 20.0, 0.0, 60.0,
+          "§2.4 principle 3: 'the arms … swing forward with the opposite legs'; amplitude " + _OURS),
+]
+
+#: The registry: attribute name -> :class:`AttributeSpec`, in documentation order.
+ATTRIBUTES: Mapping[str, AttributeSpec] = MappingProxyType({s.name: s for s in _SPECS})
+
+# Pairs (lower, upper) that must stay strictly ordered whatever the overrides.
+_ORDERED_PAIRS = (("sf_min", "sf_max"), ("speed_min", "speed_max"),
+                  ("step_length_min_rel", "step_length_max_rel"),
+                  ("swing1_end_fraction", "swing2_end_fraction"))
+
+
+def _unknown_name(name) -> ConfigError:
+    close = difflib.get_close_matches(str(name), list(ATTRIBUTES), n=3, cutoff=0.6)
+    allowed = ("a registered attribute name, close matches: " + ", ".join(close) if close
+               else "one of " + ", ".join(ATTRIBUTES))
+    return ConfigError(out_of_range(f"attributes.{name}", name, allowed))
+
+
+class LocomotionAttributes:
+    """An immutable, validated set of locomotion attribute values (units as in :data:`ATTRIBUTES`).
+
+    Read a value as an attribute (``attrs.toe_clearance``) or with :meth:`get`; angles come in
+    degrees, :meth:`rad` gives radians. Build one with :meth:`defaults` and
+    :meth:`with_overrides`; the constructor takes a complete mapping of every name.
+    """
+
+    __slots__ = ("_values",)
+
+    def __init__(self, values: Mapping[str, float]):
+        if not isinstance(values, Mapping):
+            raise ConfigError(out_of_range("attributes", values, "a mapping of attribute name to number"))
+        for name in values:
+            if name not in ATTRIBUTES:
+                raise _unknown_name(name)
+        missing = [n for n in ATTRIBUTES if n not in values]
+        if missing:
+            raise ConfigError(out_of_range("attributes", f"no value for {', '.join(missing)}",
+                                           "a value for every registered attribute"))
+        checked = {n: ATTRIBUTES[n].check(values[n]) for n in ATTRIBUTES}
+        for lo, hi in _ORDERED_PAIRS:
+            if not checked[lo] < checked[hi]:
+                raise ConfigError(out_of_range(f"attributes.{lo}", checked[lo],
+                                               f"less than attributes.{hi} = {checked[hi]:g}"))
+        object.__setattr__(self, "_values", MappingProxyType(checked))
+
+    @classmethod
+    def defaults(cls) -> "LocomotionAttributes":
+        """Every attribute at its registered default."""
+        return cls({n: s.default for n, s in ATTRIBUTES.items()})
+
+    def with_overrides(self, overrides: Mapping[str, float] | None) -> "LocomotionAttributes":
+        """A copy with some values replaced; names and ranges are checked (ConfigError)."""
+        if overrides is None:
+            return self
+        if not isinstance(overrides, Mapping):
+            raise ConfigError(out_of_range("attributes", overrides, "a mapping of attribute name to number"))
+        for name in overrides:
+            if name not in ATTRIBUTES:
+                raise _unknown_name(name)
+        return type(self)({**self._values, **overrides})
+
+    def get(self, name: str) -> float:
+        """The value of ``name`` in its registered unit; ConfigError for an unknown name."""
+        if name not in ATTRIBUTES:
+            raise _unknown_name(name)
+        return self._values[name]
+
+    def rad(self, name: str) -> float:
+        """The value of an angle attribute (unit ``deg``) in radians."""
+        spec = ATTRIBUTES.get(name)
+        if spec is None:
+            raise _unknown_name(name)
+        if spec.unit != "deg":
+            raise ConfigError(out_of_range(f"attributes.{name}", f"unit {spec.unit}", "an angle in deg for rad()"))
+        return math.radians(self._values[name])
+
+    def as_dict(self) -> dict[str, float]:
+        """Every value by name, in registry order (a plain, JSON-ready dict)."""
+        return dict(self._values)
+
+    def overrides(self) -> dict[str, float]:
+        """Only the values that differ from the registered defaults."""
+        return {n: v for n, v in self._values.items() if v != ATTRIBUTES[n].default}
+
+    def __getattr__(self, name: str) -> float:
+        # Only reached when normal lookup fails; private names must fail normally so that
+        # copy/pickle machinery does not recurse before _values is set.
+        if name.startswith("_") or name not in ATTRIBUTES:
+            raise AttributeError(f"{type(self).__name__!s} has no attribute {name!r}")
+        return self._values[name]
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable; use with_overrides()")
+
+    def __delattr__(self, name):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(ATTRIBUTES))
+
+    def __eq__(self, other):
+        if not isinstance(other, LocomotionAttributes):
+            return NotImplemented
+        return dict(self._values) == dict(other._values)
+
+    def __hash__(self):
+        return hash(tuple(self._values.items()))
+
+    def __reduce__(self):
+        return (type(self), (dict(self._values),))
+
+    def __repr__(self):
+        changed = self.overrides()
+        inner = ", ".join(f"{k}={v!r}" for k, v in changed.items()) if changed else "defaults"
+        return f"{type(self).__name__}({inner})"
+
+
+def resolve(attributes: LocomotionAttributes | Mapping[str, float] | None) -> LocomotionAttributes:
+    """Accept ``None`` (defaults), a mapping of overrides, or a ready :class:`LocomotionAttributes`."""
+    if attributes is None:
+        return LocomotionAttributes.defaults()
+    if isinstance(attributes, LocomotionAttributes):
+        return attributes
+    return LocomotionAttributes.defaults().with_overrides(attributes)
+
+
+def markdown_table() -> str:
+    """The text of docs/attributes.md, generated from the registry."""
+    lines = [
+        "# Locomotion attributes",
+        "",
+        "<!-- Generated from klaw_ocp.gait.attributes.ATTRIBUTES; do not edit by hand. Regenerate with",
+        "     python -c \"from klaw_ocp.gait.attributes import markdown_table as t; print(t(), end='')\" > docs/attributes.md",
+        "     tests/test_attributes.py fails when this file and the registry disagree. -->",
+        "",
+        "The values that individualise a walk (paper section 3 and section 5). Override any of them",
+        "in a config's `attributes:` mapping. Units: `deg` angles (radians internally), `l1` a",
+        "multiple of the leg length l1 = l3 + l4, `1` a plain fraction. Ranges are inclusive.",
+    ]
+    group = None
+    for spec in ATTRIBUTES.values():
+        if spec.group != group:
+            group = spec.group
+            lines += ["", f"## {group}", "", "| name | unit | default | range | source |",
+                      "|---|---|---|---|---|"]
+        lines.append(f"| `{spec.name}` | {spec.unit} | {spec.default:g} | {spec.low:g} to "
+                     f"{spec.high:g} | {spec.paper} |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,155 @@
+"""Locomotion parameters: section 3, the normalizing formula (eq. 1) and the anatomical limits.
+
+The three locomotion parameters are the speed v, the step length sl and the step frequency sf,
+tied by ``v = sl·sf``. The paper's normalizing formula (eq. 1, from Inman's data) picks the
+energy-saving combination for a body height H::
+
+    sl / (sf · H) = 0.004      <=>      sf² = v / (0.004 · H)
+
+with sl and H in m and sf in steps/min, so v = sl·sf is in m/min (ERRATA 9). The user-facing
+speed is in km/h; :func:`complete_parameters` converts. From any non-empty subset of (v, sl, sf)
+it completes the others, then checks the result against the limits held as locomotion
+attributes (``sf_max = 182 steps/min`` is the paper's example).
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+from ..body import Body
+from ..errors import ConfigError, GaitLimitError, out_of_range
+from .attributes import LocomotionAttributes, resolve
+
+#: The constant of eq. 1: sl / (sf · H) with sl and H in m and sf in steps/min (unit min/step).
+NORMALIZING_CONSTANT = 0.004
+
+#: km/h -> m/min (eq. 1 works in m/min because sf is in steps/min).
+KMH_TO_M_PER_MIN = 1000.0 / 60.0
+
+
+@dataclass(frozen=True)
+class LocomotionParameters:
+    """A complete, consistent set of locomotion parameters (section 3).
+
+    Attributes:
+        speed_kmh: forward speed v, km/h.
+        step_length_m: step length sl, m (ankle to ankle, one step = half a cycle).
+        step_frequency_spm: step frequency sf, steps/min.
+    """
+
+    speed_kmh: float
+    step_length_m: float
+    step_frequency_spm: float
+
+    @property
+    def speed_m_per_min(self) -> float:
+        """v in m/min, the unit in which ``v = sl·sf`` holds (ERRATA 9)."""
+        return self.speed_kmh * KMH_TO_M_PER_MIN
+
+    @property
+    def speed_m_per_s(self) -> float:
+        """v in m/s."""
+        return self.speed_kmh / 3.6
+
+    def as_dict(self) -> dict[str, float]:
+        return {"speed_kmh": self.speed_kmh, "step_length_m": self.step_length_m,
+                "step_frequency_spm": self.step_frequency_spm}
+
+
+def _positive(field: str, value, unit: str) -> float | None:
+    """None stays None (not given); anything else must be a finite number > 0."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ConfigError(out_of_range(field, value, f"a finite number > 0 in {unit}"))
+    value = float(value)
+    if not math.isfinite(value) or value <= 0.0:
+        raise ConfigError(out_of_range(field, value, f"a finite number > 0 in {unit}"))
+    return value
+
+
+def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequency=None,
+                        attributes: LocomotionAttributes | None = None, *,
+                        field_prefix: str = "walk") -> LocomotionParameters:
+    """Complete (v, sl, sf) from any non-empty subset with eq. 1, then check the limits.
+
+    Args:
+        body: gives the body height H of eq. 1 and the leg length l1 for the step-length limits.
+        speed_kmh: v in km/h, or None.
+        step_length: sl in m, or None.
+        step_frequency: sf in steps/min, or None.
+        attributes: the limits (defaults if None).
+        field_prefix: how errors name the source, e.g. ``walk`` or ``walk.schedule[2]``.
+
+    With all three given they must satisfy v = sl·sf within
+    ``attributes.parameter_consistency_tolerance`` (relative); sl and sf are then kept and v is
+    recomputed from them, because sl and sf are what the step constraints use.
+
+    Raises:
+        ConfigError: a value is not a finite number > 0, or none is given.
+        GaitLimitError: the three disagree, or a completed value is outside the limits.
+    """
+    attrs = resolve(attributes)
+    f_v, f_sl, f_sf = (f"{field_prefix}.speed", f"{field_prefix}.step_length",
+                       f"{field_prefix}.step_frequency")
+    v_kmh = _positive(f_v, speed_kmh, "km/h")
+    sl = _positive(f_sl, step_length, "m")
+    sf = _positive(f_sf, step_frequency, "steps/min")
+    if v_kmh is None and sl is None and sf is None:
+        raise ConfigError(out_of_range(field_prefix, "no locomotion parameter",
+                                       "at least one of speed, step_length, step_frequency"))
+    h = body.height
+    v = None if v_kmh is None else v_kmh * KMH_TO_M_PER_MIN  # m/min
+    given = {f_v: v is not None, f_sl: sl is not None, f_sf: sf is not None}
+
+    if v is not None and sl is not None and sf is not None:
+        mismatch = abs(sl * sf - v) / v
+        tol = attrs.parameter_consistency_tolerance
+        if mismatch > tol:
+            raise GaitLimitError(
+                f"{field_prefix}: got speed {v_kmh:g} km/h, step_length {sl:g} m and step_frequency "
+                f"{sf:g} steps/min, which disagree (sl·sf = {sl * sf / KMH_TO_M_PER_MIN:.4g} km/h, "
+                f"{100 * mismatch:.3g} % off), allowed a mismatch of at most {100 * tol:g} % "
+                f"(attributes.parameter_consistency_tolerance)")
+        v = sl * sf
+    elif v is not None and sl is not None:
+        sf = v / sl
+    elif v is not None and sf is not None:
+        sl = v / sf
+    elif sl is not None and sf is not None:
+        v = sl * sf
+    elif v is not None:
+        sf = math.sqrt(v / (NORMALIZING_CONSTANT * h))  # eq. 1, right-hand form
+        sl = v / sf
+    elif sl is not None:
+        sf = sl / (NORMALIZING_CONSTANT * h)
+        v = sl * sf
+    else:
+        sl = NORMALIZING_CONSTANT * h * sf
+        v = sl * sf
+
+    params = LocomotionParameters(speed_kmh=v / KMH_TO_M_PER_MIN, step_length_m=sl,
+                                  step_frequency_spm=sf)
+    _check_limits(body, params, attrs, given, (f_v, f_sl, f_sf))
+    return params
+
+
+def _check_limits(body: Body, p: LocomotionParameters, attrs: LocomotionAttributes,
+                  given: dict[str, bool], fields: tuple[str, str, str]) -> None:
+    """Raise GaitLimitError for the first value outside its limits, user-given values first."""
+    f_v, f_sl, f_sf = fields
+    l1 = body.l1
+    checks = [
+        (f_v, p.speed_kmh, attrs.speed_min, attrs.speed_max, "km/h", "speed_min/speed_max"),
+        (f_sl, p.step_length_m, attrs.step_length_min_rel * l1, attrs.step_length_max_rel * l1, "m",
+         f"step_length_min_rel/step_length_max_rel × leg length l1 = {l1:.4g} m"),
+        (f_sf, p.step_frequency_spm, attrs.sf_min, attrs.sf_max, "steps/min", "sf_min/sf_max"),
+    ]
+    # A value the user typed is the likelier culprit, so report it before derived ones.
+    checks.sort(key=lambda c: not given[c[0]])
+    for field, value, lo, hi, unit, source in checks:
+        if not lo <= value <= hi:
+            origin = "" if given[field] else " (completed by eq. 1)"
+            raise GaitLimitError(f"{field}: got {value:.6g} {unit}{origin}, allowed {lo:.4g} to "
+                                 f"{hi:.4g} {unit} (attributes.{source})")

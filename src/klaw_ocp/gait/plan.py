@@ -1,0 +1,204 @@
+"""The high-level plan of a walk, step by step (section 2.4 principle 1, section 3, section 5).
+
+The high-level concepts run before each step (principle 1): eq. 1 completes the locomotion
+parameters, eq. 2 gives the timings and eq. 3 the final conditions. Changes of the parameters
+take effect "with a granularity of one step" (section 5), which is what lets KLAW accelerate and
+decelerate. :func:`plan_steps` applies this to a whole walk.
+
+Schedule semantics (our reading of section 5; see docs/paper-map.md):
+
+* An entry ``{step: k, ...}`` with any non-empty subset of ``speed`` (km/h), ``step_length`` (m)
+  and ``step_frequency`` (steps/min) is completed with eq. 1 to a full parameter set at step k.
+* Between two entries k_a < k_b, speed and step length are interpolated linearly per step and
+  ``sf = v/sl``, so a walk speeds up or slows down smoothly. sf is then a ratio of two linear
+  functions, monotone between the entries, so it never leaves the range the two entries span.
+* Before the first entry the base walk parameters hold; after the last entry its values hold.
+* Steps are numbered from 0. Step i starts where step i-1 ended: its stance origin is the
+  previous step's ``next_ankle_x`` (the first starts at x = 0) and its start time is the sum of the
+  previous steps' t_step.
+* A duration becomes a number of steps by adding steps until their summed t_step reaches it
+  (at least one step).
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from ..body import Body
+from ..errors import ConfigError, out_of_range
+from .attributes import LocomotionAttributes, resolve
+from .parameters import LocomotionParameters, complete_parameters
+from .symmetry import StepConstraints, step_constraints
+from .timings import StateTimings, state_phase_timings
+
+#: Keys of a request or schedule entry that carry locomotion parameters.
+PARAMETER_KEYS = ("speed", "step_length", "step_frequency")
+#: A guard against a duration so long that planning would never end.
+MAX_STEPS = 100_000
+
+
+@dataclass(frozen=True)
+class StepPlan:
+    """Everything the low level needs to execute step ``index`` (the step constraints).
+
+    ``t_start`` is the time (s) of the heel strike that begins the step, from the start of the walk.
+    """
+
+    index: int
+    parameters: LocomotionParameters
+    timings: StateTimings
+    constraints: StepConstraints
+    t_start: float = 0.0
+
+    def as_dict(self) -> dict:
+        """A flat, JSON-ready dict; keys carry their unit (``_s``, ``_m``, ``_rad``, ...)."""
+        c = self.constraints
+        return {
+            "index": self.index,
+            "t_start_s": self.t_start,
+            **self.parameters.as_dict(),
+            **self.timings.as_dict(),
+            "w_m": c.w, "theta1_rad": c.theta1, "theta3_rad": c.theta3,
+            "hip_x_m": c.hip_x, "hip_y_m": c.hip_y,
+            "ankle_x_m": c.ankle_x, "ankle_y_m": c.ankle_y,
+            "heel_x_m": c.heel_x, "next_ankle_x_m": c.next_ankle_x,
+            "r_m": c.r, "omega3_rad": c.omega3, "theta5_impact_rad": c.theta5,
+        }
+
+
+def _request_values(request, field: str) -> dict:
+    """The parameter values of a request (mapping or LocomotionParameters), None when absent."""
+    if request is None:
+        return {k: None for k in PARAMETER_KEYS}
+    if isinstance(request, LocomotionParameters):
+        return {"speed": request.speed_kmh, "step_length": request.step_length_m,
+                "step_frequency": request.step_frequency_spm}
+    if not isinstance(request, Mapping):
+        raise ConfigError(out_of_range(field, request, "a mapping of speed, step_length, step_frequency"))
+    return {k: request.get(k) for k in PARAMETER_KEYS}
+
+
+def _complete(body, values: dict, attrs, prefix: str) -> LocomotionParameters:
+    return complete_parameters(body, speed_kmh=values["speed"], step_length=values["step_length"],
+                               step_frequency=values["step_frequency"], attributes=attrs,
+                               field_prefix=prefix)
+
+
+def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionParameters]], dict]:
+    """Completed entries sorted by step, and each step's position in the user's list."""
+    if schedule is None:
+        return [], {}
+    if isinstance(schedule, (str, bytes, Mapping)) or not isinstance(schedule, Sequence):
+        raise ConfigError(out_of_range("walk.schedule", schedule, "a list of {step, speed?, "
+                                       "step_length?, step_frequency?} entries"))
+    entries: dict[int, LocomotionParameters] = {}
+    positions: dict[int, int] = {}
+    for j, entry in enumerate(schedule):
+        field = f"walk.schedule[{j}]"
+        if not isinstance(entry, Mapping):
+            raise ConfigError(out_of_range(field, entry, "a mapping {step, speed?, step_length?, "
+                                           "step_frequency?}"))
+        extra = sorted(set(entry) - {"step", *PARAMETER_KEYS})
+        if extra:
+            raise ConfigError(out_of_range(f"{field}.{extra[0]}", entry[extra[0]],
+                                           "only the keys step, speed, step_length, step_frequency"))
+        k = entry.get("step")
+        if isinstance(k, bool) or not isinstance(k, numbers.Integral) or k < 0:
+            raise ConfigError(out_of_range(f"{field}.step", k, "an integer >= 0"))
+        k = int(k)
+        if k in entries:
+            raise ConfigError(out_of_range(f"{field}.step", k, "a step not already in the schedule"))
+        values = _request_values(entry, field)
+        if all(values[key] is None for key in PARAMETER_KEYS):
+            raise ConfigError(out_of_range(field, dict(entry), "at least one of speed, step_length, "
+                                           "step_frequency"))
+        entries[k] = _complete(body, values, attrs, field)
+        positions[k] = j
+    return sorted(entries.items()), positions
+
+
+def _parameters_at(i: int, base: LocomotionParameters | None,
+                   entries: list[tuple[int, LocomotionParameters]], body, attrs) -> LocomotionParameters:
+    """The locomotion parameters of step ``i`` under the schedule semantics of this module."""
+    if not entries or i < entries[0][0]:
+        return base
+    for (ka, pa), (kb, pb) in zip(entries, entries[1:]):
+        if ka <= i < kb:
+            if i == ka:
+                return pa
+            f = (i - ka) / (kb - ka)
+            v = pa.speed_kmh + f * (pb.speed_kmh - pa.speed_kmh)
+            sl = pa.step_length_m + f * (pb.step_length_m - pa.step_length_m)
+            # sf = v/sl through eq. 1's v+sl branch, which also re-checks the limits.
+            return complete_parameters(body, speed_kmh=v, step_length=sl, attributes=attrs,
+                                       field_prefix=f"walk.step[{i}]")
+    return entries[-1][1]
+
+
+def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None = None,
+               duration: float | None = None,
+               attributes: LocomotionAttributes | Mapping | None = None) -> list[StepPlan]:
+    """Plan every step of a walk: parameters (eq. 1), timings (eq. 2) and constraints (eq. 3).
+
+    Args:
+        body: anthropometry.
+        base_request: a mapping with any of ``speed`` (km/h), ``step_length`` (m),
+            ``step_frequency`` (steps/min), or a :class:`LocomotionParameters`; may be empty only
+            when the schedule has an entry at step 0.
+        schedule: a list of mappings ``{step: k, speed?, step_length?, step_frequency?}``.
+        n_steps: the number of steps (give this or ``duration``).
+        duration: the walk's duration in s; steps are added until their t_step sum reaches it.
+        attributes: locomotion attributes (defaults if None).
+
+    Raises:
+        ConfigError: malformed arguments, both or neither of n_steps/duration, a schedule entry
+            beyond the last step.
+        GaitLimitError: a step's parameters are outside the limits.
+    """
+    attrs = resolve(attributes)
+    if (n_steps is None) == (duration is None):
+        raise ConfigError(out_of_range("walk", f"steps={n_steps}, duration={duration}",
+                                       "exactly one of steps or duration"))
+    if n_steps is not None and (isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral)
+                                or not 1 <= n_steps <= MAX_STEPS):
+        raise ConfigError(out_of_range("walk.steps", n_steps, f"an integer from 1 to {MAX_STEPS}"))
+    if duration is not None and (isinstance(duration, bool) or not isinstance(duration, numbers.Real)
+                                 or not math.isfinite(duration) or duration <= 0):
+        raise ConfigError(out_of_range("walk.duration", duration, "a finite number > 0 in s"))
+
+    base_values = _request_values(base_request, "walk")
+    entries, positions = _parse_schedule(body, schedule, attrs)
+    if any(v is not None for v in base_values.values()):
+        base = _complete(body, base_values, attrs, "walk")
+    elif entries and entries[0][0] == 0:
+        base = None  # never used: the schedule defines step 0 onwards
+    else:
+        raise ConfigError(out_of_range("walk", "no speed, step_length or step_frequency",
+                                       "at least one of them, or a schedule entry at step 0"))
+
+    plans: list[StepPlan] = []
+    t, x = 0.0, 0.0
+    while True:
+        i = len(plans)
+        if n_steps is not None and i >= n_steps:
+            break
+        if duration is not None and i >= 1 and t >= duration - 1e-9:
+            break  # the tolerance keeps an exact multiple of t_step from adding a step
+        if i >= MAX_STEPS:
+            raise ConfigError(out_of_range("walk.duration", duration,
+                                           f"a duration of at most {MAX_STEPS} steps"))
+        p = _parameters_at(i, base, entries, body, attrs)
+        timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
+        constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x)
+        plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))
+        t += timings.t_step
+        x = constraints.next_ankle_x
+
+    # An entry the walk never reaches would be silently ignored; say so instead.
+    last_step = entries[-1][0] if entries else -1
+    if last_step >= len(plans):
+        raise ConfigError(out_of_range(f"walk.schedule[{positions[last_step]}].step", last_step,
+                                       f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
+    return plans

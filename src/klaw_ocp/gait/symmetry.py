@@ -1,0 +1,144 @@
+"""Step symmetry: section 3, eq. 3, the final conditions of a step at heel strike.
+
+Frame: x forward, y up, ground at y = 0. The stance leg's origin ``ankle1`` is the flat-foot
+ankle of the stance foot, at (x_a, y_a) = (x_a, l9) (ERRATA 6: the printed "l0" is l9, the
+ankle height; l0 is the pelvis width). The swing leg lands straight, its kinematic foot touching
+the ground with the heel at::
+
+    heel = (x_nh, 0) = (x_a + sl - l8, 0)             (ERRATA 6: the printed "l_g" is l8)
+
+The triangle hip-ankle-heel of the landing leg has sides l1 (hip-ankle), l11 (ankle-heel) and r
+(hip-heel), and its interior angle at the ankle is θ5 + ω8, where cos ω8 = l8/l11 and θ5, the
+ankle angle at impact, is a locomotion attribute. We read θ5 literally (ERRATA, open choice): the
+angle between the leg axis and the foot's long axis, about 90° for a neutral ankle; the other
+reading gives w < l1 at heel strike, against the text's w > l1. The cosine law gives::
+
+    r² = l1² + l11² - 2·l1·l11·cos(θ5 + ω8)
+    ω3 = acos((l1² + r² - l11²) / (2·l1·r))           (angle at the hip between leg and heel)
+    hip = (x_h, y_h) = (x_a + sl/2, sqrt(r² - (x_nh - x_h)²))
+    w  = sqrt((y_h - y_a)² + (sl/2)²)                  (stance leg length)
+    θ1 = asin(sl / (2w))                              (stance leg, > 0: hip ahead of the ankle)
+    θ3 = -ω3 - asin((x_nh - x_h) / r)                 (swing thigh, < 0: foot ahead of the hip)
+
+Signs follow the errata's conventions (stance hip = ankle + w·(sin θ1, cos θ1); swing ankle =
+hip - l1·(sin θ3, cos θ3) for a straight leg). For a compass gait without feet θ3 = -θ1 (ERRATA
+6); the foot makes |θ3| < θ1.
+
+Stance origin (ERRATA, open choice): the next stance leg's origin is its own flat-foot ankle at
+``next_ankle_x = x_a + sl``, i.e. the heel at heel strike plus l8. With it the next stance starts
+at the mirror image of the end of the previous one, and consecutive origins are exactly one step
+length apart.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import asdict, dataclass
+
+from ..body import Body
+from ..errors import ConfigError, GaitLimitError, out_of_range
+from .attributes import LocomotionAttributes, resolve
+
+
+@dataclass(frozen=True)
+class StepConstraints:
+    """The final conditions of a step at heel strike (eq. 3) and the geometry behind them.
+
+    Lengths in m, angles in rad, positions in the world frame (x forward, y up, ground y = 0).
+
+    Attributes:
+        step_length: sl, m.
+        w: stance leg length at heel strike (> l1: the foot lifts the hip).
+        theta1: stance leg angle from the vertical, > 0 with the hip ahead of the ankle.
+        theta3: swing thigh angle from the vertical, < 0 with the foot ahead of the hip.
+        r: distance hip to the landing heel.
+        omega3: angle at the hip between the landing leg axis and the hip-heel line.
+        hip_x, hip_y: hip position at heel strike.
+        ankle_x, ankle_y: stance origin ``ankle1`` (flat-foot ankle, y = l9).
+        heel_x: x of the landing heel (on the ground).
+        next_ankle_x: the next stance origin, x_a + sl (flat-foot ankle of the new stance leg).
+        theta5: ankle angle at impact used, rad.
+    """
+
+    step_length: float
+    w: float
+    theta1: float
+    theta3: float
+    r: float
+    omega3: float
+    hip_x: float
+    hip_y: float
+    ankle_x: float
+    ankle_y: float
+    heel_x: float
+    next_ankle_x: float
+    theta5: float
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+def _finite(field: str, value, allowed: str, positive: bool) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
+            or (positive and value <= 0):
+        raise ConfigError(out_of_range(field, value, allowed))
+    return float(value)
+
+
+def step_constraints(body: Body, step_length, attributes: LocomotionAttributes | None = None,
+                     ankle_x=0.0) -> StepConstraints:
+    """The heel-strike final conditions (w, θ1, θ3) of a step of length ``step_length`` (eq. 3).
+
+    Args:
+        body: anthropometry (l1, l8, l9, l11, ω8).
+        step_length: sl in m, ankle to ankle.
+        attributes: gives ``theta5_impact`` (deg).
+        ankle_x: x of the stance origin ankle1 (the previous step's ``next_ankle_x``).
+
+    Raises:
+        ConfigError: sl is not a finite number > 0, or ankle_x is not finite.
+        GaitLimitError: the landing leg cannot reach the ground at that step length.
+    """
+    sl = _finite("walk.step_length", step_length, "a finite number > 0 in m", positive=True)
+    x_a = _finite("ankle_x", ankle_x, "a finite number in m", positive=False)
+    attrs = resolve(attributes)
+    th5 = attrs.rad("theta5_impact")
+    l1, l8, l9, l11 = body.l1, body.l8, body.l9, body.l11
+    y_a = l9
+
+    r2 = l1 ** 2 + l11 ** 2 - 2.0 * l1 * l11 * math.cos(th5 + body.omega8)
+    r = math.sqrt(r2)  # > 0: l1 > l11 for any body, so the triangle never degenerates
+    # Clamp the rounding of a nearly degenerate triangle; the argument is in [-1, 1] analytically.
+    omega3 = math.acos(max(-1.0, min(1.0, (l1 ** 2 + r2 - l11 ** 2) / (2.0 * l1 * r))))
+
+    x_nh = x_a + sl - l8
+    x_h = x_a + 0.5 * sl
+    dx = x_nh - x_h
+    dy2 = r2 - dx ** 2
+    sl_max = 2.0 * (math.sqrt(max(0.0, r2 - y_a ** 2)) + l8)  # hip would drop to ankle height
+    if dy2 <= 0.0 or math.sqrt(dy2) <= y_a:
+        raise GaitLimitError(f"walk.step_length: got {sl:.6g} m, allowed below {sl_max:.4g} m "
+                             f"(eq. 3: the landing leg cannot reach the ground with the hip above "
+                             f"the stance ankle at theta5_impact = {attrs.theta5_impact:g} deg)")
+    y_h = math.sqrt(dy2)
+    w = math.hypot(y_h - y_a, 0.5 * sl)
+    theta1 = math.asin(0.5 * sl / w)
+    theta3 = -omega3 - math.asin(dx / r)
+    return StepConstraints(step_length=sl, w=w, theta1=theta1, theta3=theta3, r=r, omega3=omega3,
+                           hip_x=x_h, hip_y=y_h, ankle_x=x_a, ankle_y=y_a, heel_x=x_nh,
+                           next_ankle_x=x_a + sl, theta5=th5)
+
+
+def landing_heel(body: Body, c: StepConstraints) -> tuple[float, float]:
+    """Rebuild the landing heel from the hip, θ3 and the foot (the inverse of eq. 3).
+
+    The straight swing leg puts the ankle at hip - l1·(sin θ3, cos θ3); the heel is l11 from the
+    ankle along the ankle→hip direction rotated counter-clockwise by θ5 + ω8. Used by tests and
+    by the swing phase to check that eq. 3 closes.
+    """
+    ax = c.hip_x - body.l1 * math.sin(c.theta3)
+    ay = c.hip_y - body.l1 * math.cos(c.theta3)
+    ux, uy = math.sin(c.theta3), math.cos(c.theta3)  # unit vector ankle -> hip
+    a = c.theta5 + body.omega8
+    return (ax + body.l11 * (ux * math.cos(a) - uy * math.sin(a)),
+            ay + body.l11 * (ux * math.sin(a) + uy * math.cos(a)))
