@@ -10,7 +10,9 @@ The foot (figures 5 and 6, Table B-1 rows 8-13), for a shank of absolute angle
 
 - ``u_b``: the backward sole direction, ``u`` rotated counter-clockwise by ``theta5``. theta5 is the
   angle between the leg axis and the foot's long axis, so 90 deg is a neutral ankle: a vertical
-  shank then has a horizontal sole (ERRATA "Open choices", theta5).
+  shank then has a horizontal sole (ERRATA "Open choices", theta5). The angle knee-ankle-heel is
+  then theta5 + omega8, the interior angle of eq. 3. theta5 > 90 deg lifts the toe (dorsiflexion),
+  theta5 < 90 deg lowers it (plantar flexion).
 - ``u_f = -u_b`` the forward sole direction, ``n`` = ``u_f`` rotated CCW by 90 deg (the foot's "up").
 - ``heel = ankle + l8 u_b - l9 n`` (l8: heel to the ankle's projection on the sole, l9: ankle height).
 - ``metatarsal = ankle + sqrt(l12^2 - l9^2) u_f - l9 n`` (l12 is the ankle to 1st metatarsal head
