@@ -1,0 +1,265 @@
+"""The experiment file: YAML -> validated experiment objects (the only module that imports yaml).
+
+An experiment names a body (Appendix B), a walk (section 3: any non-empty subset of the locomotion
+parameters v, sl, sf, a duration or a number of steps, and an optional per-step schedule as in
+section 5), overrides of the locomotion attributes, and solver and output options::
+
+    name: natural_walk            # a slug: also the default output folder results/<name>
+    body: {height: 1.8, mass: 80} # m, kg
+    walk: {speed: 5.0, duration: 12}
+    attributes: {pelvic_list: 5.0}
+    solver: {method: multiple-shooting}
+    output: {animation: false}
+
+Validation happens in two layers. Pydantic (strict types, ``extra="forbid"``) checks the shape;
+then the model's own validators run the paper's checks (Body ranges, the attribute registry, and
+eq. 1-3 for every step through :func:`klaw_ocp.gait.plan_steps`), so a file that loads also plans.
+Every failure is raised as one :class:`ConfigError` whose message is one line,
+``<field.path>: got <value>, allowed <...>``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal, Optional
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .body import Body
+from .errors import ConfigError, KlawError, out_of_range
+from .gait import LocomotionAttributes, StepPlan, plan_steps
+
+class _FieldError(ValueError):
+    """Raised inside a validator; the field path is filled in from pydantic's error location."""
+
+    def __init__(self, got: str, allowed: str):
+        super().__init__(f"got {got}, allowed {allowed}")
+        self.got, self.allowed = got, allowed
+
+
+#: Shared pydantic settings: unknown keys are errors, no silent "5" -> 5.0, no NaN or infinity.
+_STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+SOLVER_METHODS = ("multiple-shooting", "plain-shooting")
+NLP_CHOICES = ("auto", "rootfinder", "ipopt")
+
+
+class BodyConfig(BaseModel):
+    """Body height (m) and mass (kg); ranges are checked by :class:`klaw_ocp.body.Body`."""
+
+    model_config = _STRICT
+    height: float
+    mass: float
+
+
+class ScheduleEntry(BaseModel):
+    """From step ``step`` (0-based) on, these locomotion parameters (completed with eq. 1)."""
+
+    model_config = _STRICT
+    step: int = Field(ge=0)
+    speed: Optional[float] = Field(default=None, gt=0)  # km/h
+    step_length: Optional[float] = Field(default=None, gt=0)  # m
+    step_frequency: Optional[float] = Field(default=None, gt=0)  # steps/min
+
+    @model_validator(mode="after")
+    def _some_parameter(self):
+        if self.speed is None and self.step_length is None and self.step_frequency is None:
+            raise _FieldError(f"{{step: {self.step}}} with no parameter",
+                              "at least one of speed, step_length, step_frequency")
+        return self
+
+
+class WalkConfig(BaseModel):
+    """The locomotion request: any non-empty subset of speed (km/h), step_length (m) and
+    step_frequency (steps/min); exactly one of duration (s) or steps; an optional schedule.
+
+    ``start_from_rest`` / ``end_at_rest`` ask the walk (middle level) to start from standing and
+    to end standing, as in fig. 8; the high-level plan is the same either way.
+    """
+
+    model_config = _STRICT
+    speed: Optional[float] = Field(default=None, gt=0)
+    step_length: Optional[float] = Field(default=None, gt=0)
+    step_frequency: Optional[float] = Field(default=None, gt=0)
+    duration: Optional[float] = Field(default=None, gt=0)
+    steps: Optional[int] = Field(default=None, ge=1)
+    schedule: list[ScheduleEntry] = Field(default_factory=list)
+    start_from_rest: bool = False
+    end_at_rest: bool = False
+
+    @model_validator(mode="after")
+    def _duration_or_steps(self):
+        if (self.duration is None) == (self.steps is None):
+            got = (f"duration {self.duration:g} and steps {self.steps}" if self.duration is not None
+                   else "neither duration nor steps")
+            raise _FieldError(got, "exactly one of duration (s) or steps")
+        return self
+
+    def request(self) -> dict[str, Optional[float]]:
+        """The base locomotion parameters as a mapping for :func:`plan_steps`."""
+        return {"speed": self.speed, "step_length": self.step_length,
+                "step_frequency": self.step_frequency}
+
+
+class SolverConfig(BaseModel):
+    """How the subphase boundary-value problems are solved (section 4.1)."""
+
+    model_config = _STRICT
+    method: Literal["multiple-shooting", "plain-shooting"] = "multiple-shooting"
+    intervals: int = Field(default=20, ge=1, le=500)
+    tolerance: float = Field(default=1e-9, gt=0, lt=1)
+    max_iterations: int = Field(default=50, ge=1, le=10_000)
+    nlp: Literal["auto", "rootfinder", "ipopt"] = "auto"
+
+
+class OutputConfig(BaseModel):
+    """Where results go (default ``results/<name>``) and whether to render an animation."""
+
+    model_config = _STRICT
+    dir: Optional[str] = None
+    animation: bool = False
+
+
+class ExperimentConfig(BaseModel):
+    """A whole experiment. Build it with :func:`load_config` or :meth:`from_mapping`."""
+
+    model_config = _STRICT
+    name: str = Field(pattern=r"^[a-z0-9_-]+$", max_length=64)
+    body: BodyConfig
+    walk: WalkConfig
+    attributes: dict[str, float] = Field(default_factory=dict)
+    solver: SolverConfig = Field(default_factory=SolverConfig)
+    output: OutputConfig = Field(default_factory=OutputConfig)
+
+    @field_validator("attributes")
+    @classmethod
+    def _known_attributes(cls, value):
+        LocomotionAttributes.defaults().with_overrides(value)  # raises ConfigError
+        return value
+
+    @model_validator(mode="after")
+    def _plannable(self):
+        # The paper's own checks (Body ranges, eq. 1 limits, eq. 2, eq. 3) at load time, so that
+        # a config that loads is one that can be walked.
+        self.plan()
+        return self
+
+    @classmethod
+    def from_mapping(cls, data: Any) -> "ExperimentConfig":
+        """Validate a plain mapping (as from YAML); every failure is one ConfigError line."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"config: got {_short(data)}, allowed a mapping with name, body, walk")
+        try:
+            return cls.model_validate(data)
+        except ValidationError as exc:
+            raise _one_line(exc) from None
+
+    def body_model(self) -> Body:
+        return Body(height=self.body.height, mass=self.body.mass)
+
+    def attributes_model(self) -> LocomotionAttributes:
+        return LocomotionAttributes.defaults().with_overrides(self.attributes)
+
+    def plan(self) -> list[StepPlan]:
+        """Every step of the walk (eq. 1-3), see :func:`klaw_ocp.gait.plan_steps`."""
+        schedule = [e.model_dump(exclude_none=True) for e in self.walk.schedule]
+        return plan_steps(self.body_model(), self.walk.request(), schedule, n_steps=self.walk.steps,
+                          duration=self.walk.duration, attributes=self.attributes_model())
+
+    def output_dir(self) -> Path:
+        """``output.dir`` if given, else ``results/<name>`` (relative to the working directory)."""
+        return Path(self.output.dir) if self.output.dir else Path("results") / self.name
+
+
+def load_config(path) -> ExperimentConfig:
+    """Read and validate an experiment YAML file; raise one-line ConfigError on any problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(out_of_range("config", str(path), "an existing YAML file (not found)")) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(out_of_range("config", str(path), f"a readable UTF-8 YAML file "
+                                       f"({type(exc).__name__})")) from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{path}: invalid YAML{where}: {problem}") from None
+    if data is None:
+        raise ConfigError(out_of_range("config", f"{path} (empty)", "a mapping with name, body, walk"))
+    return ExperimentConfig.from_mapping(data)
+
+
+# ---------------------------------------------------------------------------------------------
+# pydantic ValidationError -> one line "<field.path>: got <value>, allowed <...>"
+
+_ALLOWED = {
+    "float_type": "a number", "float_parsing": "a number", "finite_number": "a finite number",
+    "int_type": "an integer", "int_parsing": "an integer", "int_from_float": "an integer",
+    "bool_type": "true or false", "bool_parsing": "true or false",
+    "string_type": "a string", "dict_type": "a mapping", "list_type": "a list",
+    "model_type": "a mapping", "model_attributes_type": "a mapping",
+    "string_pattern_mismatch": "a slug of lowercase letters, digits, '_' and '-'",
+}
+_BOUNDS = {"greater_than": "a number > {gt}", "greater_than_equal": "a number >= {ge}",
+           "less_than": "a number < {lt}", "less_than_equal": "a number <= {le}", "string_too_long": "at most {max_length} characters",
+           "literal_error": "one of {expected}"}
+
+
+def _path(loc) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "config"
+
+
+def _short(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _model_at(loc):
+    """The pydantic model class that owns the last key of ``loc`` (to list its allowed keys)."""
+    model = ExperimentConfig
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part)
+        ann = getattr(field, "annotation", None)
+        inner = getattr(ann, "__args__", (ann,))[0] if ann is not None else None
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            model = ann
+        elif isinstance(inner, type) and issubclass(inner, BaseModel):
+            model = inner
+        else:
+            return None
+    return model
+
+
+def _one_line(exc: ValidationError) -> ConfigError:
+    errors = exc.errors()
+    err = errors[0]
+    more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+    cause = (err.get("ctx") or {}).get("error")
+    kind, loc = err["type"], err["loc"]
+    field = _path(loc)
+    if isinstance(cause, KlawError):
+        # Raised by the paper's checks, already one line and naming its own field path.
+        return ConfigError(str(cause).splitlines()[0] + more)
+    if isinstance(cause, _FieldError):
+        return ConfigError(f"{field}: got {cause.got}, allowed {cause.allowed}{more}")
+    if kind == "extra_forbidden":
+        model = _model_at(loc)
+        keys = ", ".join(model.model_fields) if model is not None else "the documented keys"
+        return ConfigError(f"{field}: got an unknown key (value {_short(err['input'])}), allowed only the keys {keys}{more}")
+    if kind == "missing":
+        return ConfigError(f"{field}: got nothing, allowed a required value{more}")
+    if kind in _BOUNDS:
+        ctx = {k: (f"{v:g}" if isinstance(v, float) else v) for k, v in (err.get("ctx") or {}).items()}
+        allowed = _BOUNDS[kind].format(**ctx)
+    else:
+        allowed = _ALLOWED.get(kind, err["msg"])
+    return ConfigError(f"{field}: got {_short(err['input'])}, allowed {allowed}{more}")
