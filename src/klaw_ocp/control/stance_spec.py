@@ -48,9 +48,9 @@ def lock_rates(mass: np.ndarray, qd: np.ndarray, index: int, rule: str) -> np.nd
 
 def _lock(rule: str):
     def apply(x, c, mode):
-        mass = np.asarray(stance_functions()["mass_bias"](x[:3], x[3:], c[:16])[0])
+        mass = np.asarray(stance_functions()["mass_bias"](x[:3], x[3:6], c[:16])[0])
         x = x.copy()
-        x[3:] = lock_rates(mass, x[3:], 0, rule)
+        x[3:6] = lock_rates(mass, x[3:6], 0, rule)
         c = c.copy()
         c[_LOCKED] = 1.0
         return x, c, {**mode, "locked": True, "early_lock": True}
@@ -63,6 +63,20 @@ def _unlock(x, c, mode):
     return x, c, {**mode, "locked": False}
 
 
+def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
+    """The lock rules as events on any state that starts with the stance state and any context
+    that starts with :data:`STANCE_CONTEXT` (the swing subphases re-simulate the stance)."""
+    x, t, u, c = ca.SX.sym("x", nx), ca.SX.sym("t"), ca.SX.sym("u", nu), ca.SX.sym("c", nc)
+    args = [x, t, u, c]
+    return (
+        Event("leg_too_long", ca.Function("leg_too_long", args, [x[0] - c[_L1]]), +1,
+              lambda x, t, c, mode: not mode.get("locked") and not mode.get("early_lock") and x[1] < 0,
+              _lock(lock_rule)),
+        Event("leg_vertical", ca.Function("leg_vertical", args, [x[1]]), +1,
+              lambda x, t, c, mode: bool(mode.get("locked")), _unlock),
+    )
+
+
 @lru_cache(maxsize=None)
 def stance_spec(lock_rule: str = "momentum") -> SubphaseSpec:
     """The stance :class:`SubphaseSpec` (built once per lock rule)."""
@@ -70,14 +84,7 @@ def stance_spec(lock_rule: str = "momentum") -> SubphaseSpec:
     u, c = ca.SX.sym("u", 2), ca.SX.sym("c", len(STANCE_CONTEXT))
     forces, pa = stance_forces(x, t, u, c)
     args = [x, t, u, c]
-    w_minus_l1 = ca.Function("leg_too_long", args, [x[0] - c[_L1]])
-    theta1 = ca.Function("leg_vertical", args, [x[1]])
-    events = (
-        Event("leg_too_long", w_minus_l1, +1,
-              lambda x, t, c, mode: not mode.get("locked") and not mode.get("early_lock") and x[1] < 0,
-              _lock(lock_rule)),
-        Event("leg_vertical", theta1, +1, lambda x, t, c, mode: bool(mode.get("locked")), _unlock),
-    )
+    events = stance_lock_events(6, 2, len(STANCE_CONTEXT), lock_rule)
     return SubphaseSpec(
         name="stance",
         state_names=STANCE_STATE.names,

@@ -69,9 +69,18 @@ def apply_lock(mass, rhs, locked, index: int):
     return sel @ mass @ sel + locked * (unit @ unit.T), sel @ rhs
 
 
+@lru_cache(maxsize=None)
+def _mass_bias_function() -> ca.Function:
+    q, qd, p = ca.SX.sym("q", N_Q), ca.SX.sym("qd", N_Q), ca.SX.sym("p", N_BODY_PARAMETERS)
+    return ca.Function("stance_mass_bias", [q, qd, p], [*stance_mass_bias(q, qd, p)])
+
+
 def stance_accelerations_sx(q, qd, force, p, locked=0):
-    """``qdd`` of the stance model; ``locked`` = 1 gives the rigid leg (wdd = 0)."""
-    mass, bias = stance_mass_bias(q, qd, p)
+    """``qdd`` of the stance model; ``locked`` = 1 gives the rigid leg (wdd = 0).
+
+    Works on any SX expressions (the derivation itself needs pure symbols, so it goes through
+    a Function built once)."""
+    mass, bias = _mass_bias_function()(q, qd, p)
     mass, rhs = apply_lock(mass, bias + force, locked, 0)
     return ca.solve(mass, rhs)
 

@@ -67,9 +67,18 @@ def swing_mass_bias(q, qd, hip_acc, p):
     return ca.simplify(mass), ca.simplify(bias)
 
 
+@lru_cache(maxsize=None)
+def _mass_bias_function() -> ca.Function:
+    q, qd = ca.SX.sym("q", N_Q), ca.SX.sym("qd", N_Q)
+    hip_acc, p = ca.SX.sym("hip_acc", 2), ca.SX.sym("p", N_BODY_PARAMETERS)
+    return ca.Function("swing_mass_bias", [q, qd, hip_acc, p], [*swing_mass_bias(q, qd, hip_acc, p)])
+
+
 def swing_accelerations_sx(q, qd, force, hip_acc, p, locked=0):
-    """``qdd`` of the swing model; ``locked`` = 1 gives the locked knee of eq. 5 (theta4dd = 0)."""
-    mass, bias = swing_mass_bias(q, qd, hip_acc, p)
+    """``qdd`` of the swing model; ``locked`` = 1 gives the locked knee of eq. 5 (theta4dd = 0).
+
+    Works on any SX expressions (via a Function built once, like the stance model)."""
+    mass, bias = _mass_bias_function()(q, qd, hip_acc, p)
     mass, rhs = apply_lock(mass, bias + force, locked, 1)
     return ca.solve(mass, rhs)
 

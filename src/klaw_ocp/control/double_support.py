@@ -1,0 +1,129 @@
+"""Kinematics that frame the swing: the hind leg's double support and curve P (§3, §4.2, §4.3).
+
+"the continuing stance phase of the hind leg is completed kinematically": from heel strike of the
+leading leg to toe-off (t_ds later), the hind foot's toe tip stays on the ground while the foot
+pitches about the first metatarsal head (heel-off) towards the toe-off pitch attribute. The knee
+follows by inverse kinematics of the two-segment leg between hip and ankle; the foot is pitched
+further whenever the straight leg could not reach it. The state at toe-off starts swing1.
+
+Curve P (§4.3): the ankle path of swing1, ``y(s) = sum A_i s^(4-i)`` with s the ankle's forward
+travel since toe-off and the five conditions y(0) = a0, y(C) = a_max, y'(C) = 0, y(D) = a_min,
+y'(D) = 0. D and a_min place the ankle where "the toe is directly under the knee" at t1 with the
+thigh at its heel-strike angle; C = 0.3 D; a_max falls with speed.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..body import Body
+from ..dynamics.kinematics import foot_points
+
+
+def _rot(v, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def metatarsal_offset(body: Body) -> float:
+    """Forward distance from the flat-foot ankle to the first metatarsal head."""
+    return math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+
+
+def hind_ankle(body: Body, metatarsal_x: float, pitch: float) -> np.ndarray:
+    """Ankle of a foot pitched by ``pitch`` (rad, heel up) about the metatarsal head on the ground."""
+    flat = np.array([-metatarsal_offset(body), body.l9])   # ankle relative to the metatarsal head
+    return np.array([metatarsal_x, 0.0]) + _rot(flat, -pitch)
+
+
+def leg_angles(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[float, float]:
+    """(theta3, theta4) of the swing-model leg reaching from ``hip`` to ``ankle`` (knee forward)."""
+    d_vec = ankle - hip
+    d = min(float(np.hypot(*d_vec)), body.l1)
+    beta = math.atan2(-d_vec[0], -d_vec[1])
+    cos_delta = (body.l3 ** 2 + d ** 2 - body.l4 ** 2) / (2 * body.l3 * d)
+    cos_knee = (d ** 2 - body.l3 ** 2 - body.l4 ** 2) / (2 * body.l3 * body.l4)
+    return beta - math.acos(max(-1.0, min(1.0, cos_delta))), math.acos(max(-1.0, min(1.0, cos_knee)))
+
+
+def reach_pitch(body: Body, hip: np.ndarray, metatarsal_x: float) -> float:
+    """Smallest foot pitch at which the straight leg reaches the ankle (0 if it reaches it flat)."""
+    reach = lambda p: float(np.hypot(*(hind_ankle(body, metatarsal_x, p) - hip))) - body.l1 * (1 - 1e-9)
+    if reach(0.0) <= 0:
+        return 0.0
+    if reach(math.radians(89)) > 0:
+        return math.radians(89)
+    return brentq(reach, 0.0, math.radians(89), xtol=1e-13)
+
+
+@dataclass(frozen=True)
+class HindLeg:
+    """The hind leg at one instant of double support (world frame)."""
+    theta3: float
+    theta4: float
+    pitch: float
+    ankle: np.ndarray
+
+
+def hind_leg(body: Body, hip: np.ndarray, metatarsal_x: float, t: float, t_ds: float,
+             pitch_start: float, pitch_toe_off: float) -> HindLeg:
+    """The hind leg at time t of the double support (pitch interpolated, raised to reach)."""
+    pitch = pitch_start + (pitch_toe_off - pitch_start) * min(1.0, t / t_ds)
+    pitch = max(pitch, reach_pitch(body, hip, metatarsal_x))
+    ankle = hind_ankle(body, metatarsal_x, pitch)
+    th3, th4 = leg_angles(body, hip, ankle)
+    return HindLeg(th3, th4, pitch, ankle)
+
+
+def ankle_angle(shank_angle: float, pitch: float) -> float:
+    """theta5 of a foot pitched by ``pitch``: the angle from the shank's upward axis, counter-
+    clockwise, to the backward sole direction (pi/2 for a vertical shank and a flat foot)."""
+    up = np.array([math.sin(shank_angle), math.cos(shank_angle)])
+    back = np.array([-math.cos(pitch), math.sin(pitch)])
+    return math.atan2(up[0] * back[1] - up[1] * back[0], up @ back) % (2 * math.pi)
+
+
+def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -> tuple[np.ndarray, float]:
+    """Ankle position and shank angle with the toe tip directly under the knee (end of swing1)."""
+    def toe_ahead(phi):
+        ankle = knee - body.l4 * np.array([math.sin(phi), math.cos(phi)])
+        return float(foot_points(body, ankle, phi, theta5, theta6)["toe"][0] - knee[0])
+    phi = brentq(toe_ahead, -0.5, math.pi / 2, xtol=1e-13)
+    return knee - body.l4 * np.array([math.sin(phi), math.cos(phi)]), phi
+
+
+def curve_p_coefficients(a0: float, a_max: float, a_min: float, c: float, d: float) -> np.ndarray:
+    """[A0..A4] of y(s) = A0 s^4 + A1 s^3 + A2 s^2 + A3 s + A4 from the five conditions of §4.3."""
+    rows = [[0, 0, 0, 0, 1],
+            [c ** 4, c ** 3, c ** 2, c, 1],
+            [4 * c ** 3, 3 * c ** 2, 2 * c, 1, 0],
+            [d ** 4, d ** 3, d ** 2, d, 1],
+            [4 * d ** 3, 3 * d ** 2, 2 * d, 1, 0]]
+    return np.linalg.solve(np.array(rows, float), np.array([a0, a_max, 0.0, a_min, 0.0]))
+
+
+def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, theta6: float,
+                       clearance: float) -> tuple[np.ndarray, float, float]:
+    """Ankle, shank angle and ankle angle theta5 at t1, with the toe tip under the knee.
+
+    The foot keeps the ankle angle interpolated towards heel strike (``theta5_natural``) when its
+    toe then clears the ground by ``clearance``; otherwise the ankle dorsiflexes just enough (as a
+    walker's does at mid-swing). With the thigh at its heel-strike angle and the toe under the knee
+    (§4.3), the interpolated foot alone would often point its toe into the ground.
+    """
+    def toe_height(theta5):
+        ankle, phi = toe_under_knee(body, knee, theta5, theta6)
+        return float(foot_points(body, ankle, phi, theta5, theta6)["toe"][1]) - clearance
+
+    theta5 = theta5_natural
+    if toe_height(theta5) < 0:
+        upper = theta5_natural + math.radians(60)
+        if toe_height(upper) < 0:
+            theta5 = upper
+        else:
+            theta5 = brentq(toe_height, theta5_natural, upper, xtol=1e-12)
+    ankle, phi = toe_under_knee(body, knee, theta5, theta6)
+    return ankle, phi, theta5

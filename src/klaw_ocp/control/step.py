@@ -1,0 +1,196 @@
+"""One locomotion step at the low level: stance, hind-leg double support, swing1-3 (section 4).
+
+:class:`StepController` turns a step's constraints (eq. 2, eq. 3) into the four subphase problems,
+solves them with whichever solver it was given, and carries each subphase's torque parameters
+over to initialise the next step ("the F profiles from one step are carried over to initialize
+the next", §4.1). Frames: world x forward, y up, ground y = 0; the stance state is relative to the
+stance ankle at ``(origin_x, l9)``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..body import Body
+from ..dynamics import stance_functions, swing_functions
+from ..errors import ConvergenceError
+from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
+from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
+                             swing1_end_posture)
+from .gains import ControlGains
+from .stance_law import STANCE_CONTEXT
+from .stance_spec import lock_rates, stance_spec
+from .swing_law import SWING_CONTEXT
+from .swing_spec import swing_specs
+
+
+@dataclass
+class StepInput:
+    """What a step needs besides its plan: where it starts and how the body arrives there."""
+    x0: np.ndarray                 # stance state at heel strike, relative to the stance ankle
+    origin_x: float                # stance ankle x (flat-foot ankle, eq. 3's ankle1)
+    hind_ankle_x: float            # flat-foot ankle x of the hind (soon swinging) leg
+    y_start: float                 # hip height above the stance ankle at heel strike
+    excursion: float               # height of the hip's mid-step bump (0 for start/stop steps)
+
+
+@dataclass
+class StepResult:
+    """A solved step: its subphase solutions plus the kinematic double support of the hind leg."""
+    index: int
+    origin_x: float
+    hind_ankle_x: float
+    t_start: float
+    subphases: list
+    double_support: dict
+    curve_p: dict
+    final_stance_state: np.ndarray
+    heel_clearance_min: float
+    plan: object = None
+    notes: list = field(default_factory=list)
+
+    def subphase(self, name: str) -> SubphaseSolution:
+        return next(s for s in self.subphases if s.name == name)
+
+
+class StepController:
+    """Builds and solves the subphase problems of successive steps with one solver."""
+
+    def __init__(self, body: Body, attrs, gains: ControlGains, solver, lock_rule: str = "momentum"):
+        self.body, self.attrs, self.gains, self.solver = body, attrs, gains, solver
+        self.lock_rule = lock_rule
+        self.n = solver.intervals
+        self.stance_spec = stance_spec(lock_rule)
+        self.swing_specs = swing_specs(lock_rule)
+        self.guesses: dict = {}
+        weight = body.mass * body.g
+        self.scales = {"stance": np.array([0.05 * weight * body.l1, 0.02]),
+                       "swing1": np.array([0.2 * body.m1 * body.g * body.l1]),
+                       "swing2": np.array([0.1 * body.m4 * body.g * body.l4, 0.05]),
+                       "swing3": np.array([0.05 * body.m1 * body.g * body.l1])}
+
+    # -- contexts ------------------------------------------------------------------------------
+    def stance_context(self, plan, inp: StepInput) -> dict:
+        b, g, t = self.body, self.gains, plan.timings
+        ctx = dict(zip(STANCE_CONTEXT.names[:16], b.dynamic_parameters()))
+        ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=g.theta2_ref, k_y=g.k_y, c_y=g.c_y,
+                   t_off=t.t_theta1_off, t_step=t.t_step, y_start=inp.y_start,
+                   y_end=plan.constraints.hip_y - b.l9, excursion=inp.excursion, locked=0.0,
+                   theta1_target=plan.constraints.theta1, w_target=plan.constraints.w)
+        return ctx
+
+    def _solve(self, step: int, problem: SubphaseProblem) -> SubphaseSolution:
+        solution = self.solver.solve(problem)
+        if not solution.success:
+            raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message)
+        self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
+        return solution
+
+    def _guess(self, name: str, nu: int) -> np.ndarray:
+        return self.guesses.get(name, np.zeros(nu)).copy()
+
+    def solve_stance(self, plan, inp: StepInput, index: int) -> SubphaseSolution:
+        t = plan.timings
+        grid = time_grid(0.0, t.t_step, self.n, self._breakpoints(plan))
+        ctx = STANCE_CONTEXT.pack(self.stance_context(plan, inp))
+        problem = SubphaseProblem(self.stance_spec, inp.x0, grid, ctx, self._guess("stance", 2),
+                                  self.scales["stance"], step=index)
+        return self._solve(index, problem)
+
+    @staticmethod
+    def _breakpoints(plan) -> list:
+        t = plan.timings
+        return [t.t_theta1_off, t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end]
+
+    # -- the whole step ------------------------------------------------------------------------
+    def solve_step(self, plan, inp: StepInput, index: int) -> StepResult:
+        b, a, t, con = self.body, self.attrs, plan.timings, plan.constraints
+        stance = self.solve_stance(plan, inp, index)
+        sctx = self.stance_context(plan, inp)
+        origin = np.array([inp.origin_x, b.l9])
+        hip_fn = stance_functions()["hip"]
+
+        def stance_at(time):
+            k = int(np.argmin(np.abs(stance.t - time)))
+            return stance.states[k]
+
+        def hip_world(x):
+            pos, vel, _ = hip_fn(x[:3], x[3:6], np.zeros(3))
+            return origin + np.asarray(pos).ravel(), np.asarray(vel).ravel()
+
+        # hind leg: toe on the ground, foot pitching about the metatarsal head until toe-off
+        t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
+        mt_x = inp.hind_ankle_x + metatarsal_offset(b)
+        hip0, _ = hip_world(stance.states[0])
+        pitch0 = reach_pitch(b, hip0, mt_x)
+        pitch_to = max(math.radians(a.toe_off_foot_pitch), pitch0)
+        ds_nodes = [k for k in range(len(stance.t)) if stance.t[k] <= t_to + 1e-12]
+        ds = {"t": [], "theta3": [], "theta4": [], "pitch": []}
+        for k in ds_nodes:
+            leg = hind_leg(b, hip_world(stance.states[k])[0], mt_x, stance.t[k], t_to, pitch0, pitch_to)
+            for key, val in (("t", stance.t[k]), ("theta3", leg.theta3), ("theta4", leg.theta4), ("pitch", leg.pitch)):
+                ds[key].append(val)
+        x_to = stance_at(t_to)
+        hip_to, hip_vel_to = hip_world(x_to)
+        eps = 1e-6
+        leg_to = hind_leg(b, hip_to, mt_x, t_to, t_to, pitch0, pitch_to)
+        leg_before = hind_leg(b, hip_to - eps * hip_vel_to, mt_x, t_to - eps, t_to, pitch0, pitch_to)
+        th3d_to = (leg_to.theta3 - leg_before.theta3) / eps
+
+        # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
+        theta5_to = ankle_angle(leg_to.theta3 + leg_to.theta4, leg_to.pitch)
+        theta6_to = leg_to.pitch
+        theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
+        hip_t1, _ = hip_world(stance_at(t1))
+        knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
+        # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
+        ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 1e-3)
+        a0, x0 = leg_to.ankle[1], leg_to.ankle[0]
+        d_travel, a_min = ankle_t1[0] - x0, ankle_t1[1]
+        a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
+                    max(a0, a_min) + 0.01 * b.l1)
+        coeffs = curve_p_coefficients(a0, a_max, a_min, a.swing_peak_position * d_travel, d_travel)
+
+        ctx = dict(sctx)
+        ctx.update(stance_F_theta1=stance.parameters["F_theta1_magnitude"],
+                   stance_pa_offset=stance.parameters["pa_offset"], origin_x=origin[0], origin_y=origin[1],
+                   l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
+                   foot_from_time=t1, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
+                   theta6_impact=theta6_hs, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
+                   tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
+                   swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
+                   **{f"P{i}": coeffs[i] for i in range(5)})
+        c = SWING_CONTEXT.pack(ctx)
+        specs = self.swing_specs
+        s1 = self._solve(index, SubphaseProblem(
+            specs["swing1"], np.concatenate([x_to, [leg_to.theta3, leg_to.theta4, th3d_to]]),
+            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c, self._guess("swing1", 1), self.scales["swing1"],
+            step=index))
+        x_end1 = s1.final_state
+        th4d = float(np.asarray(specs["swing1"].rhs(x_end1, t1, [s1.parameters["F_theta3_magnitude"]], c)).ravel()[7])
+        guess2 = self._guess("swing2", 2)
+        guess2[1] = 0.0
+        s2 = self._solve(index, SubphaseProblem(
+            specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c,
+            guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance]),
+            recovery_step=np.array([0.0, -0.005]), step=index))
+        x_end2 = s2.final_state
+        mass = np.asarray(swing_functions()["mass_bias"](x_end2[6:8], x_end2[8:10], np.zeros(2),
+                                                          b.dynamic_parameters())[0])
+        th3d_locked = lock_rates(mass, x_end2[8:10], 1, self.lock_rule)[0]
+        s3 = self._solve(index, SubphaseProblem(
+            specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
+            time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c, self._guess("swing3", 1),
+            self.scales["swing3"], step=index))
+        heel = [float(specs["swing3"].path(s3.states[k], s3.t[k], [s3.parameters["F_theta3_moment"]], c))
+                for k in range(len(s3.t) - 1)]
+        return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
+                          t_start=plan.t_start, subphases=[stance, s1, s2, s3],
+                          double_support={k: np.array(v) for k, v in ds.items()},
+                          curve_p={"a0": a0, "a_max": a_max, "a_min": a_min, "C": a.swing_peak_position * d_travel,
+                                   "D": d_travel, "x0": x0, "coefficients": coeffs.tolist(),
+                                   "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
+                          final_stance_state=stance.final_state, heel_clearance_min=min(heel) if heel else 0.0,
+                          plan=plan)

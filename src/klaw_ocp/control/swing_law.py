@@ -1,0 +1,161 @@
+"""The closed-loop swing dynamics of section 4.3, one right-hand side per subphase.
+
+The swing leg hangs from the hip of the stance model of the same step (assumption 4). Rather than
+interpolating a sampled hip trajectory, every swing state carries the stance state along and
+integrates the stance model with its solved parameters: the hip acceleration fed to the swing
+model is then exact, and identical in both solver modes.
+
+States (stance part first, see :mod:`.stance_law`):
+
+- swing1: ``[w, theta1, theta2, wd, theta1d, theta2d, theta3, theta4, theta3d]``. The knee is
+  locked for the dynamics (eq. 5) while theta4 is driven kinematically by forcing the ankle onto
+  curve P; theta4's rate comes from differentiating that constraint, with a Baumgarte term that
+  keeps the ankle on the curve (ERRATA "Swing1": the paper accepts this inconsistency).
+  F_theta3 = a decaying exponential (ERRATA 7: F_theta3, not F_theta1).
+- swing2: ``[..6.., theta3, theta4, theta3d, theta4d]``. F_theta3 is a spring-damper holding the
+  thigh at its heel-strike angle, shifted by the recovery actuator; F_theta4 a decaying exponential.
+- swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
+  holding spring-damper plus a small constant moment that brings the heel down in time.
+
+The kinematic foot (ankle angle theta5, toe angle theta6) is interpolated linearly in time from its
+values at t1 to its heel-strike values (§4.3; see control/double_support.py for swing1).
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import casadi as ca
+
+from ..dynamics.kinematics import foot_points_sx
+from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
+from ..dynamics.swing import swing_accelerations_sx, swing_points
+from .layout import VectorLayout
+from .stance_law import STANCE_CONTEXT, body_vector, stance_forces
+from .torques import decaying_exponential, spring_damper
+
+SWING_CONTEXT = VectorLayout(
+    STANCE_CONTEXT,
+    ["stance_F_theta1", "stance_pa_offset", "origin_x", "origin_y", "l8", "l9", "l12", "l13",
+     "toe_off_time", "swing_end_time", "foot_from_time", "theta5_from", "theta5_impact", "theta6_from",
+     "theta6_impact",
+     "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
+     "swing2_start", "tau4"],
+)
+SWING_FORCES = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
+SWING1_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta4", "theta3d")
+SWING2_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta4", "theta3d", "theta4d")
+SWING3_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta3d")
+
+
+def names(c) -> SimpleNamespace:
+    return SimpleNamespace(**{n: c[i] for i, n in enumerate(SWING_CONTEXT.names)})
+
+
+def stance_part(xs, t, c):
+    """Stance rates, its forces, and the hip's world position, velocity and acceleration."""
+    n = names(c)
+    u_stance = ca.vertcat(n.stance_F_theta1, n.stance_pa_offset)
+    stance_c = c[: len(STANCE_CONTEXT)]
+    force, pa = stance_forces(xs, t, u_stance, stance_c)
+    qdd = stance_accelerations_sx(xs[0:3], xs[3:6], force, body_vector(c), n.locked)
+    pos, vel, acc = hip_kinematics_sx(xs[0:3], xs[3:6], qdd)
+    hip = pos + ca.vertcat(n.origin_x, n.origin_y)
+    return ca.vertcat(xs[3:6], qdd), ca.vertcat(force, pa), hip, vel, acc
+
+
+def foot_angles(t, c):
+    """theta5, theta6 interpolated linearly from their values at ``foot_from_time`` to heel strike
+    (§4.3; the foot's own motion before t1 does not enter the dynamics)."""
+    n = names(c)
+    s = (t - n.foot_from_time) / (n.swing_end_time - n.foot_from_time)
+    return (n.theta5_from + s * (n.theta5_impact - n.theta5_from),
+            n.theta6_from + s * (n.theta6_impact - n.theta6_from))
+
+
+def foot(q_swing, hip, t, c):
+    """World positions of heel and toe tip of the swing foot."""
+    n = names(c)
+    ankle = swing_points(q_swing, hip, body_vector(c))["ankle"]
+    theta5, theta6 = foot_angles(t, c)
+    pts = foot_points_sx(ankle, q_swing[0] + q_swing[1], theta5, theta6, n.l8, n.l9, n.l12, n.l13)
+    return pts["heel"], pts["toe"]
+
+
+def curve_p(c, s):
+    n = names(c)
+    return (((n.P0 * s + n.P1) * s + n.P2) * s + n.P3) * s + n.P4
+
+
+def swing1_rhs(x, t, u, c):
+    n = names(c)
+    stance_rates, _, hip, hip_vel, hip_acc = stance_part(x[0:6], t, c)
+    th3, th4, th3d = x[6], x[7], x[8]
+    f3 = decaying_exponential(t, n.toe_off_time, n.tau3, u[0])
+    qdd = swing_accelerations_sx(ca.vertcat(th3, th4), ca.vertcat(th3d, 0), ca.vertcat(f3, 0), hip_acc,
+                                 body_vector(c), 1)
+    th3dd = qdd[0]
+    # knee driven kinematically: d/dt [ankle_y - P(ankle_x - x0)] = -baumgarte * (ankle_y - P(...))
+    q_sym, h_sym = ca.SX.sym("q", 2), ca.SX.sym("h", 2)
+    ankle = swing_points(q_sym, h_sym, body_vector(c))["ankle"]
+    constraint = ankle[1] - curve_p(c, ankle[0] - n.curve_x0)
+    grad_q = ca.jacobian(constraint, q_sym)
+    grad_h = ca.jacobian(constraint, h_sym)
+    subs = lambda e: ca.substitute(ca.substitute(e, q_sym, ca.vertcat(th3, th4)), h_sym, hip)
+    g_val, gq, gh = subs(constraint), subs(grad_q), subs(grad_h)
+    th4d = -(n.baumgarte * g_val + gq[0] * th3d + ca.mtimes(gh, hip_vel)) / gq[1]
+    return ca.vertcat(stance_rates, th3d, th4d, th3dd)
+
+
+def swing1_forces(x, t, u, c):
+    n = names(c)
+    _, stance_f, *_ = stance_part(x[0:6], t, c)
+    return ca.vertcat(stance_f, decaying_exponential(t, n.toe_off_time, n.tau3, u[0]), 0)
+
+
+def _hold(th3, th3d, c, actuator=0):
+    n = names(c)
+    return spring_damper(th3, th3d, n.k_h, n.d_h, n.theta3_target, actuator)
+
+
+def swing2_torques(x, t, u, c):
+    n = names(c)
+    return _hold(x[6], x[8], c, u[1]), decaying_exponential(t, n.swing2_start, n.tau4, u[0])
+
+
+def swing2_rhs(x, t, u, c):
+    stance_rates, _, hip, hip_vel, hip_acc = stance_part(x[0:6], t, c)
+    f3, f4 = swing2_torques(x, t, u, c)
+    qdd = swing_accelerations_sx(x[6:8], x[8:10], ca.vertcat(f3, f4), hip_acc, body_vector(c), 0)
+    return ca.vertcat(stance_rates, x[8:10], qdd)
+
+
+def swing2_forces(x, t, u, c):
+    _, stance_f, *_ = stance_part(x[0:6], t, c)
+    return ca.vertcat(stance_f, *swing2_torques(x, t, u, c))
+
+
+def swing2_toe_height(x, t, u, c):
+    _, _, hip, _, _ = stance_part(x[0:6], t, c)
+    return foot(x[6:8], hip, t, c)[1][1]
+
+
+def swing3_torque(x, t, u, c):
+    return _hold(x[6], x[7], c) + u[0]
+
+
+def swing3_rhs(x, t, u, c):
+    stance_rates, _, hip, hip_vel, hip_acc = stance_part(x[0:6], t, c)
+    f3 = swing3_torque(x, t, u, c)
+    qdd = swing_accelerations_sx(ca.vertcat(x[6], 0), ca.vertcat(x[7], 0), ca.vertcat(f3, 0), hip_acc,
+                                 body_vector(c), 1)
+    return ca.vertcat(stance_rates, x[7], qdd[0])
+
+
+def swing3_forces(x, t, u, c):
+    _, stance_f, *_ = stance_part(x[0:6], t, c)
+    return ca.vertcat(stance_f, swing3_torque(x, t, u, c), 0)
+
+
+def swing3_heel_height(x, t, u, c):
+    _, _, hip, _, _ = stance_part(x[0:6], t, c)
+    return foot(ca.vertcat(x[6], 0), hip, t, c)[0][1]

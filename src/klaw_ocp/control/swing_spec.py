@@ -1,0 +1,53 @@
+"""The three swing subphases as boundary-value problems (section 4.3).
+
+- ``swing1`` (toe-off to 50 % of t_swing): unknown F_theta3 magnitude; theta3 reaches its eq. 3
+  value at t1.
+- ``swing2`` (to 85 %): unknowns F_theta4 magnitude and the hip position actuator of the recovery
+  loop (held at 0 unless the toe would not clear the ground); the knee reaches full extension
+  (theta4 = 0) at t2. Path function: toe height, kept above the toe-clearance attribute.
+- ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
+  t_swing, where the heel lands on the ground (eq. 3 geometry). Path function: heel height.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+
+from ..solvers.problem import SubphaseSpec
+from . import swing_law as law
+from .stance_spec import stance_lock_events
+
+_NC = len(law.SWING_CONTEXT)
+
+
+def _spec(name, state, unknowns, rhs, forces, final, path=None, path_name=None, lock_rule="momentum"):
+    x, t = ca.SX.sym("x", len(state)), ca.SX.sym("t")
+    u, c = ca.SX.sym("u", len(unknowns)), ca.SX.sym("c", _NC)
+    args = [x, t, u, c]
+    return SubphaseSpec(
+        name=name, state_names=tuple(state), unknown_names=tuple(unknowns),
+        context_names=law.SWING_CONTEXT.names,
+        rhs=ca.Function(f"{name}_rhs", args, [rhs(*args)]),
+        final=ca.Function(f"{name}_final", [x, c], [final(x, c)]),
+        outputs=ca.Function(f"{name}_outputs", args, [forces(*args)]),
+        output_names=law.SWING_FORCES,
+        path=ca.Function(f"{name}_path", args, [path(*args)]) if path else None,
+        path_names=(path_name,) if path else (),
+        events=stance_lock_events(len(state), len(unknowns), _NC, lock_rule),
+        pairing=((0, 0),),
+    )
+
+
+@lru_cache(maxsize=None)
+def swing_specs(lock_rule: str = "momentum") -> dict:
+    """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
+    theta3_error = lambda x, c: x[6] - law.names(c).theta3_target
+    return {
+        "swing1": _spec("swing1", law.SWING1_STATE, ("F_theta3_magnitude",), law.swing1_rhs,
+                        law.swing1_forces, theta3_error, lock_rule=lock_rule),
+        "swing2": _spec("swing2", law.SWING2_STATE, ("F_theta4_magnitude", "hip_actuator"), law.swing2_rhs,
+                        law.swing2_forces, lambda x, c: x[7], law.swing2_toe_height, "toe_height", lock_rule),
+        "swing3": _spec("swing3", law.SWING3_STATE, ("F_theta3_moment",), law.swing3_rhs,
+                        law.swing3_forces, theta3_error, law.swing3_heel_height, "heel_height", lock_rule),
+    }

@@ -1,0 +1,157 @@
+"""The middle level: a state machine that runs step after step (sections 2.2, 2.4, 3, 5).
+
+For each step (principle 1: high level before the step, low level during it):
+
+1. stance of the leading leg, simulated for t_step (not t_stance: "the continuing stance phase of
+   the hind leg is completed kinematically");
+2. double support of the hind leg, kinematic, until toe-off at t_ds;
+3. swing1 / swing2 / swing3 of the hind leg on the hip motion of this stance (assumption 4);
+4. heel strike: the swing leg becomes the stance leg, and the heel-strike map gives the next
+   stance's initial state (:func:`klaw_ocp.dynamics.heel_strike_map`).
+
+First step: a walk that starts "walking" begins on the periodic orbit of its first step: the
+initial hip speed is found (secant method) so that the hip leaves the step as fast as it entered
+it. A walk that starts from rest (``start_from_rest``) begins standing on both feet side by side,
+at rest; its first stance starts at theta1 = 0 and the hind foot swings from beside the stance
+foot. See docs/walk.md for the last step and for what changes from step to step.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .body import Body
+from .control.gains import control_gains
+from .control.step import StepController, StepInput, StepResult
+from .dynamics import heel_strike_map, stance_functions
+from .errors import ConvergenceError
+from .solvers import make_solver
+
+
+@dataclass
+class WalkSpec:
+    """Everything the walk needs, independent of any file format."""
+    name: str
+    body: Body
+    attributes: object
+    plans: list
+    method: str = "multiple-shooting"
+    intervals: int = 20
+    tolerance: float = 1e-10
+    max_iterations: int = 50
+    nlp: str = "auto"
+    start_from_rest: bool = False
+    end_at_rest: bool = False
+    lock_rule: str = "momentum"
+
+
+@dataclass
+class Walk:
+    """A simulated walk: the solved steps in order, and how the run ended."""
+    spec: WalkSpec
+    steps: list = field(default_factory=list)
+    status: str = "ok"
+    message: str = ""
+    wall_s: float = 0.0
+    initial_state: np.ndarray | None = None
+
+    @property
+    def duration(self) -> float:
+        return sum(s.plan.timings.t_step for s in self.steps)
+
+
+def _hip_velocity(x: np.ndarray) -> np.ndarray:
+    _, vel, _ = stance_functions()["hip"](x[:3], x[3:6], np.zeros(3))
+    return np.asarray(vel).ravel()
+
+
+def _walking_state(con, speed: float, theta2: float) -> np.ndarray:
+    """Heel-strike stance state (mirror of eq. 3) with a horizontal hip velocity ``speed``."""
+    w, th = con.w, -con.theta1
+    return np.array([w, th, theta2, speed * math.sin(th), speed * math.cos(th) / w, 0.0])
+
+
+def periodic_start(controller: StepController, plan, inp: StepInput, tol: float = 1e-9) -> np.ndarray:
+    """Initial stance state whose hip leaves the step at the speed it entered it (secant method)."""
+    con, theta2 = plan.constraints, controller.gains.theta2_ref
+    mean = plan.constraints.step_length / plan.timings.t_step
+
+    def mismatch(speed):
+        inp.x0 = _walking_state(con, speed, theta2)
+        stance = controller.solve_stance(plan, inp, 0)
+        return _hip_velocity(stance.final_state)[0] - speed
+
+    v0, v1 = 1.2 * mean, 1.35 * mean
+    f0, f1 = mismatch(v0), mismatch(v1)
+    for _ in range(30):
+        if abs(f1) < tol or f1 == f0:
+            break
+        v0, v1, f0 = v1, v1 - f1 * (v1 - v0) / (f1 - f0), f1
+        f1 = mismatch(v1)
+    return _walking_state(con, v1, theta2)
+
+
+def _first_input(controller: StepController, spec: WalkSpec) -> StepInput:
+    b, plan = spec.body, spec.plans[0]
+    con = plan.constraints
+    attrs = spec.attributes
+    if spec.start_from_rest:
+        x0 = np.array([b.l1, 0.0, controller.gains.theta2_ref, 0.0, 0.0, 0.0])
+        return StepInput(x0, con.ankle_x, con.ankle_x, b.l1, 0.0)
+    inp = StepInput(None, con.ankle_x, con.ankle_x - con.step_length, con.hip_y - b.l9,
+                    _excursion(b, attrs, con.hip_y - b.l9, con.hip_y - b.l9))
+    inp.x0 = periodic_start(controller, plan, inp)
+    return inp
+
+
+def _excursion(body: Body, attrs, y_start: float, y_end: float) -> float:
+    """Height of the hip's mid-step bump above the higher heel-strike height (§4.2, Inman)."""
+    midstance = body.l1 * (1 - attrs.midstance_leg_shortening)
+    return max(midstance - max(y_start, y_end), attrs.min_hip_excursion_rel * body.l1)
+
+
+def simulate_walk(spec: WalkSpec, progress: bool = False, raise_on_failure: bool = True) -> Walk:
+    """Run the walk step by step. On a subphase that does not converge, raise
+    :class:`ConvergenceError` (naming step, subphase, residual) whose ``partial`` is the
+    :class:`Walk` of the steps completed before it; with ``raise_on_failure=False`` return that
+    walk with ``status == "failed"`` instead."""
+    wall0 = time.perf_counter()
+    solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
+                         max_iterations=spec.max_iterations, nlp=spec.nlp)
+    gains = control_gains(spec.body, spec.attributes)
+    controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule)
+    walk = Walk(spec)
+    iterator = range(len(spec.plans))
+    if progress:
+        from tqdm import tqdm
+        iterator = tqdm(iterator, desc=f"{spec.name} ({spec.method})", unit="step")
+    try:
+        inp = _first_input(controller, spec)
+        walk.initial_state = inp.x0.copy()
+        for k in iterator:
+            plan = spec.plans[k]
+            result: StepResult = controller.solve_step(plan, inp, k)
+            walk.steps.append(result)
+            inp = _next_input(spec, plan, result, spec.plans[k + 1] if k + 1 < len(spec.plans) else None)
+    except ConvergenceError as err:
+        walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
+        err.partial = walk
+        if raise_on_failure:
+            raise
+        return walk
+    walk.wall_s = time.perf_counter() - wall0
+    return walk
+
+
+def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInput | None:
+    """Heel strike: the swing leg lands at the next stance origin; map the stance state onto it."""
+    if next_plan is None:
+        return None
+    b, con = spec.body, plan.constraints
+    x_post = heel_strike_map(b, result.final_stance_state, np.array([con.step_length, 0.0]))
+    y_start = con.hip_y - b.l9
+    y_end = next_plan.constraints.hip_y - b.l9
+    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, _excursion(b, spec.attributes, y_start, y_end))
