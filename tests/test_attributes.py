@@ -21,7 +21,7 @@ EXPECTED_DEFAULTS = {
     "swing1_torque_time_constant": 0.3, "swing2_knee_time_constant": 0.3,
     "hip_hold_frequency": 2.0, "hip_hold_damping_ratio": 0.7, "leg_frequency": 3.0,
     "leg_damping_ratio": 0.3, "trunk_frequency": 1.5, "trunk_damping_ratio": 0.8,
-    "trunk_lean": 0, "hip_height_gain": 1.0, "hip_height_rate_gain": 0.05,
+    "trunk_lean": 0, "hip_height_gain": 10.0, "hip_height_rate_gain": 0.05,
     "midstance_leg_shortening": 0.01, "min_hip_excursion_rel": 0.01, "pelvic_rotation": 4,
     "pelvic_list": 5, "pelvic_lateral_shift": 0.02, "foot_lateral_distance": 0.08,
     "arm_swing_amplitude": 20,

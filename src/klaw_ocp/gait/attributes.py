@@ -125,7 +125,7 @@ _SPECS = [
           "§4.2 F_θ2 spring-damper; damping ratio " + _OURS),
     _spec("stance", "trunk_lean", "deg", 0.0, -30.0, 30.0,
           "§4.2 F_θ2 spring rest angle (θ2 > 0 leans forward); " + _OURS),
-    _spec("stance", "hip_height_gain", "m/m", 1.0, 0.0, 100.0,
+    _spec("stance", "hip_height_gain", "m/m", 10.0, 0.0, 100.0,
           "§4.2: 'if it drops too low, pa is increased'; gain of pa on the hip-height error, " + _OURS),
     _spec("stance", "hip_height_rate_gain", "s", 0.05, 0.0, 10.0,
           "§4.2 pa monitoring; gain on the hip vertical velocity, " + _OURS),
