@@ -1,0 +1,141 @@
+"""`klaw-ocp plan`: output, JSON shape, and one-line errors with exit code 2 (API and subprocess)."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from klaw_ocp.cli import SUBCOMMANDS, main
+
+ROOT = Path(__file__).resolve().parents[1]
+NATURAL = str(ROOT / "configs" / "natural_walk.yaml")
+STEP_KEYS = {"speed_kmh", "step_length_m", "step_frequency_spm", "t_cycle_s", "t_step_s", "t_ds_s",
+             "t_stance_s", "t_swing_s", "w_m", "theta1_rad", "theta3_rad", "hip_y_m",
+             "t_swing1_end_s", "t_swing2_end_s"}
+
+
+def run_main(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_plan_speed_json(capsys):
+    code, out, err = run_main(capsys, "plan", "--speed", "5", "--json")
+    assert code == 0 and err == ""
+    data = json.loads(out)
+    assert set(data) >= {"body", "attributes", "steps"}
+    assert data["body"]["height"] == 1.8 and data["body"]["mass"] == 80
+    assert data["attributes"]["sf_max"] == 182
+    (step,) = data["steps"]
+    assert STEP_KEYS <= set(step)
+    assert step["step_length_m"] == pytest.approx(0.7746, abs=1e-4)
+    assert step["step_frequency_spm"] == pytest.approx(107.58, abs=5e-3)
+    assert step["w_m"] == pytest.approx(0.896, abs=1e-3)
+    assert step["t_stance_s"] == pytest.approx(step["t_step_s"] + step["t_ds_s"])
+
+
+@pytest.mark.parametrize("argv, sf", [
+    (["--speed", "5", "--step-length", "0.5"], 166.67),
+    (["--speed", "5", "--step-length", "1.05"], 79.37),
+    (["--step-length", "0.7", "--step-frequency", "100", "--height", "1.6", "--mass", "60"], 100.0),
+])
+def test_plan_combinations(capsys, argv, sf):
+    code, out, _ = run_main(capsys, "plan", *argv, "--json")
+    assert code == 0
+    assert json.loads(out)["steps"][0]["step_frequency_spm"] == pytest.approx(sf, abs=5e-3)
+
+
+def test_plan_human_output_lists_parameters_timings_constraints(capsys):
+    code, out, _ = run_main(capsys, "plan", "--speed", "5")
+    assert code == 0
+    for text in ("Locomotion parameters (eq. 1)", "107.58", "State-phase timings (eq. 2)",
+                 "t_ds", "Step constraints at heel strike (eq. 3)", "0.8961", "0.4469", "-0.4205"):
+        assert text in out
+
+
+def test_plan_config_every_step(capsys):
+    code, out, _ = run_main(capsys, "plan", NATURAL, "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["name"] == "natural_walk" and len(data["steps"]) == 22
+    assert [s["index"] for s in data["steps"]] == list(range(22))
+    code, out, _ = run_main(capsys, "plan", NATURAL)
+    assert code == 0 and "Walk 'natural_walk': 22 steps" in out
+    assert len([l for l in out.splitlines() if l.strip().split(" ")[0].isdigit()]) == 22
+
+
+BAD_ARGS = [
+    (["plan", "--speed", "-1"], "walk.speed: got -1.0"),
+    (["plan", "--speed", "nan"], "walk.speed: got nan"),
+    (["plan", "--speed", "inf"], "walk.speed: got inf"),
+    (["plan", "--speed", "0"], "walk.speed: got 0.0"),
+    (["plan", "--step-frequency", "190"], "walk.step_frequency: got 190 steps/min, allowed 30 to 182"),
+    (["plan", "--speed", "20"], "walk.speed: got 20 km/h, allowed 0.5 to 9"),
+    (["plan", "--speed", "5", "--height", "0"], "body.height: got 0.0"),
+    (["plan", "--speed", "5", "--mass", "-80"], "body.mass: got -80.0"),
+    (["plan", "--speed", "5", "--step-length", "0.8", "--step-frequency", "120"], "walk: got speed 5 km/h"),
+    (["plan"], "plan: got no locomotion parameter"),
+    (["plan", NATURAL, "--speed", "3"], "plan: got CONFIG together with --speed"),
+    (["plan", "does_not_exist.yaml"], "config: got 'does_not_exist.yaml'"),
+]
+
+
+@pytest.mark.parametrize("argv, start", BAD_ARGS, ids=[" ".join(a[1:])[-40:] for a, _ in BAD_ARGS])
+def test_bad_input_via_main(capsys, argv, start):
+    code, out, err = run_main(capsys, *argv)
+    assert code == 2 and out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"klaw-ocp: error: {start}"), lines[0]
+    assert "Traceback" not in err
+
+
+def test_bad_config_values_via_main(capsys, tmp_path):
+    f = tmp_path / "bad.yaml"
+    f.write_text("name: bad\nbody: {height: 1.8, mass: 80}\nwalk: {speed: 5, steps: 2}\n"
+                 "colour: red\n", encoding="utf-8")
+    code, _, err = run_main(capsys, "plan", str(f))
+    assert code == 2
+    assert err.splitlines() == ["klaw-ocp: error: colour: got an unknown key (value 'red'), allowed only "
+                                "the keys name, body, walk, attributes, solver, output"]
+
+
+def test_argparse_errors_exit_2(capsys):
+    code, _, err = run_main(capsys, "plan", "--speed", "abc")
+    assert code == 2 and "invalid float value: 'abc'" in err
+    code, _, err = run_main(capsys)
+    assert code == 2 and "a COMMAND is required" in err
+
+
+def test_subcommands_are_a_registry():
+    assert set(SUBCOMMANDS) >= {"plan"}
+    assert callable(SUBCOMMANDS["plan"].handler) and callable(SUBCOMMANDS["plan"].configure)
+
+
+def _cli(*argv):
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    return subprocess.run([sys.executable, "-m", "klaw_ocp.cli", *argv], capture_output=True,
+                          text=True, cwd=ROOT, env=env, timeout=60)
+
+
+@pytest.mark.parametrize("argv, start", [
+    (["plan", "--speed", "-1"], "klaw-ocp: error: walk.speed: got -1.0"),
+    (["plan", "--speed", "nan", "--json"], "klaw-ocp: error: walk.speed: got nan"),
+    (["plan", "--step-frequency", "190"], "klaw-ocp: error: walk.step_frequency: got 190"),
+    (["plan", "--speed", "5", "--height", "0"], "klaw-ocp: error: body.height: got 0.0"),
+])
+def test_bad_input_via_subprocess(argv, start):
+    r = _cli(*argv)
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.splitlines() == [r.stderr.strip()] and r.stderr.startswith(start), r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_plan_via_subprocess():
+    r = _cli("plan", "configs/short_steps.yaml", "--json")
+    assert r.returncode == 0, r.stderr
+    steps = json.loads(r.stdout)["steps"]
+    assert len(steps) == 34 and steps[0]["step_frequency_spm"] == pytest.approx(166.67, abs=5e-3)
