@@ -108,7 +108,7 @@ def test_locked_knee_eq_5(body):
 def test_hip_kinematics_equal_printed_a2_first_display():
     rng = np.random.default_rng(5)
     for _ in range(20):
-        (w, t1, _), (wd, t1d, _), (wdd, t1dd, _) = rng.uniform(0.5, 1.0, 3), *rng.uniform(-3, 3, (2, 3))
+        w, t1, wd, t1d, wdd, t1dd = rng.uniform(0.5, 1.0), *rng.uniform(-3, 3, 5)
         s, c = np.sin(t1), np.cos(t1)
         pos, vel, acc = hip_kinematics(BODIES[0], [w, t1, 0.3], [wd, t1d, 0.1], [wdd, t1dd, 0.2])
         _close(pos, [w * s, w * c], 1.0)

@@ -1,4 +1,4 @@
-"""Argument checks shared by the numeric dynamics API (numpy in, numpy out).
+"""Argument checks of the numeric dynamics API (section 2.3, Appendix A; numpy in, numpy out).
 
 Every check raises :class:`klaw_ocp.errors.ConfigError` with the field name, the value received
 and what is allowed; ``assert`` is not used because it vanishes under ``python -O``.
