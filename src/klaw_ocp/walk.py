@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -113,11 +113,20 @@ def _excursion(body: Body, attrs, y_start: float, y_end: float) -> float:
     return max(midstance - max(y_start, y_end), attrs.min_hip_excursion_rel * body.l1)
 
 
-def simulate_walk(spec: WalkSpec, progress: bool = False, raise_on_failure: bool = True) -> Walk:
-    """Run the walk step by step. On a subphase that does not converge, raise
+def simulate_walk(spec, method: str | None = None, progress: bool = False, raise_on_failure: bool = True) -> Walk:
+    """Run the walk step by step. ``spec`` is a :class:`WalkSpec`, an experiment configuration,
+    a mapping in the configuration's shape, or the path of a YAML configuration file; ``method``
+    overrides the configured solver. On a subphase that does not converge, raise
     :class:`ConvergenceError` (naming step, subphase, residual) whose ``partial`` is the
     :class:`Walk` of the steps completed before it; with ``raise_on_failure=False`` return that
     walk with ``status == "failed"`` instead."""
+    if not isinstance(spec, WalkSpec):
+        from .config import ExperimentConfig, load_config
+        config = spec if isinstance(spec, ExperimentConfig) else (
+            ExperimentConfig.from_mapping(spec) if isinstance(spec, dict) else load_config(spec))
+        spec = walk_spec(config, method)
+    elif method is not None:
+        spec = replace(spec, method=method)
     wall0 = time.perf_counter()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)
@@ -155,3 +164,12 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     y_start = con.hip_y - b.l9
     y_end = next_plan.constraints.hip_y - b.l9
     return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, _excursion(b, spec.attributes, y_start, y_end))
+
+
+def walk_spec(config, method: str | None = None) -> WalkSpec:
+    """A :class:`WalkSpec` from a validated experiment configuration (``klaw_ocp.config``)."""
+    solver = config.solver
+    return WalkSpec(name=config.name, body=config.body_model(), attributes=config.attributes_model(),
+                    plans=config.plan(), method=method or solver.method, intervals=solver.intervals,
+                    tolerance=solver.tolerance, max_iterations=solver.max_iterations, nlp=solver.nlp,
+                    start_from_rest=config.walk.start_from_rest, end_at_rest=config.walk.end_at_rest)

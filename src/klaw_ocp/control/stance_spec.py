@@ -19,7 +19,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from ..dynamics.stance import stance_functions
+from ..dynamics import impact_functions
+from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
 from .stance_law import (STANCE_CONTEXT, STANCE_FORCES, STANCE_STATE, STANCE_UNKNOWNS, stance_final_conditions,
                          stance_forces, stance_rhs)
@@ -29,28 +30,14 @@ _L1 = STANCE_CONTEXT.index["l1"]
 
 
 
-def lock_rates(mass: np.ndarray, qd: np.ndarray, index: int, rule: str) -> np.ndarray:
-    """Rates just after coordinate ``index`` locks (ERRATA "Velocities at a lock").
-
-    ``"zero"`` zeroes that rate (the paper); ``"momentum"`` applies an impulse in that coordinate
-    only, so the other generalized momenta M qd are conserved.
-    """
-    if rule == "zero":
-        out = np.array(qd, float)
-        out[index] = 0.0
-        return out
-    n = len(qd)
-    unit = np.zeros(n)
-    unit[index] = 1.0
-    kkt = np.block([[mass, -unit[:, None]], [unit[None, :], np.zeros((1, 1))]])
-    return np.linalg.solve(kkt, np.concatenate([mass @ qd, [0.0]]))[:n]
-
-
 def _lock(rule: str):
+    """The leg locks: wd -> 0 by the chosen lock rule (ERRATA "Velocities at a lock")."""
     def apply(x, c, mode):
-        mass = np.asarray(stance_functions()["mass_bias"](x[:3], x[3:6], c[:16])[0])
         x = x.copy()
-        x[3:6] = lock_rates(mass, x[3:6], 0, rule)
+        if rule == "zero":
+            x[3] = 0.0
+        else:
+            x[:6] = np.asarray(impact_functions()["stance_lock"](x[:6], c[:N_BODY_PARAMETERS])).ravel()
         c = c.copy()
         c[_LOCKED] = 1.0
         return x, c, {**mode, "locked": True, "early_lock": True}

@@ -14,14 +14,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..body import Body
-from ..dynamics import stance_functions, swing_functions
+from ..dynamics import knee_lock_map, stance_functions
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
                              swing1_end_posture)
 from .gains import ControlGains
 from .stance_law import STANCE_CONTEXT
-from .stance_spec import lock_rates, stance_spec
+from .stance_spec import stance_spec
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -177,9 +177,8 @@ class StepController:
             guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance]),
             recovery_step=np.array([0.0, -0.005]), step=index))
         x_end2 = s2.final_state
-        mass = np.asarray(swing_functions()["mass_bias"](x_end2[6:8], x_end2[8:10], np.zeros(2),
-                                                          b.dynamic_parameters())[0])
-        th3d_locked = lock_rates(mass, x_end2[8:10], 1, self.lock_rule)[0]
+        knee = knee_lock_map(b, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
+        th3d_locked = knee[2]
         s3 = self._solve(index, SubphaseProblem(
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c, self._guess("swing3", 1),

@@ -1,0 +1,105 @@
+"""Read-only views of a simulated :class:`~klaw_ocp.walk.Walk`: the per-sample table and the summary.
+
+The table has one row per time sample, in walk time (s from the first heel strike):
+
+- ``double_support`` rows: the stance nodes before toe-off; theta3/theta4 are the hind leg's
+  kinematic angles (swing-model convention), their rates finite differences; F_theta3/F_theta4
+  are NaN because that leg is not driven dynamically then.
+- ``swing1``/``swing2``/``swing3`` rows: the integrated states of those subphases (the stance
+  state rides along, see control/swing_law.py). In swing1 theta4d is the kinematic knee rate; in
+  swing3 the knee is locked (theta4 = theta4d = 0).
+
+hip_x/hip_y are world coordinates (m), x forward from the first stance ankle, y up from the ground.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
+           "theta3d", "theta4d", "hip_x", "hip_y", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
+
+
+def _rows_for_step(step, body) -> list[dict]:
+    rows = []
+    stance = step.subphase("stance")
+    ds = step.double_support
+    rates3 = np.gradient(ds["theta3"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
+    rates4 = np.gradient(ds["theta4"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
+
+    def base(t, name, xs, forces):
+        w, th1 = xs[0], xs[1]
+        return {"t": step.t_start + t, "step": step.index, "subphase": name,
+                "w": w, "theta1": th1, "theta2": xs[2], "wd": xs[3], "theta1d": xs[4], "theta2d": xs[5],
+                "hip_x": step.origin_x + w * math.sin(th1), "hip_y": body.l9 + w * math.cos(th1),
+                "F_w": forces[0], "F_theta1": forces[1], "F_theta2": forces[2], "pa": forces[3]}
+
+    for k in range(len(ds["t"]) - 1):          # the toe-off node opens swing1
+        row = base(ds["t"][k], "double_support", stance.states[k], stance.forces[k])
+        row.update(theta3=ds["theta3"][k], theta4=ds["theta4"][k], theta3d=rates3[k], theta4d=rates4[k],
+                   F_theta3=float("nan"), F_theta4=float("nan"))
+        rows.append(row)
+    for sub in step.subphases[1:]:
+        for k in range(len(sub.t)):
+            if sub.name != "swing1" and k == 0:
+                continue                          # same instant as the previous subphase's end
+            x, f = sub.states[k], sub.forces[k]
+            row = base(sub.t[k], sub.name, x, f)
+            if sub.name == "swing1":
+                row.update(theta3=x[6], theta4=x[7], theta3d=x[8], theta4d=float("nan"))
+            elif sub.name == "swing2":
+                row.update(theta3=x[6], theta4=x[7], theta3d=x[8], theta4d=x[9])
+            else:
+                row.update(theta3=x[6], theta4=0.0, theta3d=x[7], theta4d=0.0)
+            row.update(F_theta3=f[4], F_theta4=f[5])
+            rows.append(row)
+    # swing1 knee rate: the kinematic drive, by finite differences of theta4
+    s1 = [r for r in rows if r["subphase"] == "swing1"]
+    if len(s1) > 1:
+        rates = np.gradient([r["theta4"] for r in s1], [r["t"] for r in s1])
+        for r, v in zip(s1, rates):
+            r["theta4d"] = float(v)
+    return rows
+
+
+def walk_table(walk) -> dict:
+    """Column name -> array (``subphase`` is an array of str)."""
+    rows = [r for step in walk.steps for r in _rows_for_step(step, walk.spec.body)]
+    return {c: np.array([r[c] for r in rows]) if c == "subphase" else np.array([r[c] for r in rows], float)
+            for c in COLUMNS}
+
+
+def _finite(value):
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def walk_summary(walk) -> dict:
+    """The JSON-ready summary: status, method, body, timing and per-step subphase results."""
+    steps = []
+    for step in walk.steps:
+        entry = step.plan.as_dict()
+        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min,
+                     curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
+        entry["subphases"] = [{
+            "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
+            "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
+            "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
+            "path_min": _finite(s.path_min),
+        } for s in step.subphases]
+        steps.append(entry)
+    hip = walk_table(walk) if walk.steps else None
+    spec = walk.spec
+    return {
+        "name": spec.name, "status": walk.status, "message": walk.message, "method": spec.method,
+        "solver": {"intervals": spec.intervals, "tolerance": spec.tolerance, "nlp": spec.nlp,
+                   "lock_rule": spec.lock_rule},
+        "body": spec.body.as_dict(), "attributes": spec.attributes.as_dict(),
+        "wall_s": walk.wall_s, "simulated_s": walk.duration,
+        "real_time_factor": walk.duration / walk.wall_s if walk.wall_s > 0 else None,
+        "steps_planned": len(spec.plans), "steps_completed": len(walk.steps),
+        "mean_hip_speed_kmh": (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
+                               if hip is not None and hip["t"][-1] > hip["t"][0] else None),
+        "steps": steps,
+    }

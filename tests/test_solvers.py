@@ -1,0 +1,77 @@
+"""Solvers (issue #4): grids, the two modes on one square problem, events, failures."""
+import math
+
+import numpy as np
+import pytest
+
+from klaw_ocp import Body
+from klaw_ocp.control.gains import control_gains
+from klaw_ocp.control.stance_law import STANCE_CONTEXT
+from klaw_ocp.control.stance_spec import stance_spec
+from klaw_ocp.errors import ConfigError
+from klaw_ocp.gait import LocomotionAttributes, step_constraints, state_phase_timings
+from klaw_ocp.solvers import PlainShootingSolver, SubphaseProblem, make_solver, time_grid
+
+
+def test_time_grid_puts_breakpoints_on_nodes():
+    grid = time_grid(0.0, 1.0, 20, [0.37, 0.5, 2.0])
+    assert grid.size == 21 and grid[0] == 0 and grid[-1] == 1
+    assert np.all(np.diff(grid) > 0)
+    assert np.min(np.abs(grid - 0.37)) < 1e-15 and np.min(np.abs(grid - 0.5)) < 1e-15
+
+
+def test_unknown_method_lists_the_choices():
+    with pytest.raises(ConfigError, match="multiple-shooting.*plain-shooting"):
+        make_solver("newton")
+
+
+def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None):
+    body, attrs = Body(1.8, 80), LocomotionAttributes.defaults()
+    con = step_constraints(body, 0.7746, attrs)
+    tim = state_phase_timings(107.58, attrs)
+    g = control_gains(body, attrs)
+    ctx = dict(zip(STANCE_CONTEXT.names[:16], body.dynamic_parameters()))
+    y = con.hip_y - body.l9 if y_ref is None else y_ref
+    ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=0.0, k_y=g.k_y, c_y=g.c_y,
+               t_off=tim.t_theta1_off, t_step=tim.t_step, y_start=y, y_end=y, excursion=0.04, locked=0.0,
+               theta1_target=con.theta1 if theta1_target is None else theta1_target, w_target=con.w)
+    v = speed_factor * con.step_length / tim.t_step
+    if x0 is None:
+        x0 = [con.w, -con.theta1, 0.0, -v * math.sin(con.theta1), v * math.cos(con.theta1) / con.w, 0.0]
+    return SubphaseProblem(stance_spec(), np.array(x0), time_grid(0, tim.t_step, 20, [tim.t_theta1_off]),
+                           STANCE_CONTEXT.pack(ctx), np.zeros(2), np.array([40.0, 0.02]))
+
+
+def test_both_modes_solve_the_same_square_problem_alike():
+    pb = stance_problem()
+    ms = make_solver("multiple-shooting").solve(pb)
+    ps = make_solver("plain-shooting").solve(pb)
+    assert ms.success and ps.success
+    assert ms.residual < 1e-9 and ps.residual < 1e-9
+    for key in ms.parameters:
+        assert ps.parameters[key] == pytest.approx(ms.parameters[key], rel=1e-6)
+    assert np.allclose(ms.states[-1], ps.states[-1], atol=1e-7)
+
+
+def test_failure_comes_back_as_a_result_not_an_exception():
+    pb = stance_problem(theta1_target=3.0)   # the hip cannot swing past horizontal in one step
+    for method in ("multiple-shooting", "plain-shooting"):
+        result = make_solver(method, max_iterations=15).solve(pb)
+        assert not result.success and result.status == "failed"
+        assert result.residual > 1e-3 and result.message
+
+
+def test_plain_shooting_locks_and_unlocks_the_leg():
+    body = Body(1.8, 80)
+    # the hip-height monitor asks for a hip above l1 while the hip is still behind the ankle
+    pb = stance_problem(x0=[body.l1 - 0.005, -0.3, 0.0, 0.4, 1.6, 0.0], y_ref=body.l1 + 0.03)
+    solver = PlainShootingSolver(intervals=20)
+    times, states, context, log = solver.simulate(pb, np.array([60.0, 0.0]))
+    names = [name for name, _ in log]
+    assert names[:2] == ["leg_too_long", "leg_vertical"], log
+    t_lock, t_unlock = log[0][1], log[1][1]
+    locked = (times >= t_lock) & (times <= t_unlock)
+    assert np.allclose(states[locked, 0], body.l1, atol=1e-9)      # rigid leg at l1
+    assert np.allclose(states[locked, 3], 0.0, atol=1e-12)         # wd = 0 while locked
+    k_unlock = int(np.argmin(np.abs(times - t_unlock)))
+    assert abs(states[k_unlock, 1]) < 1e-9                          # unlocked as theta1 crosses 0

@@ -1,0 +1,114 @@
+"""The walk (issue #4): both solver modes, chained steps, acceptance properties on short walks."""
+import math
+
+import numpy as np
+import pytest
+
+from klaw_ocp.errors import ConvergenceError
+from klaw_ocp.results import walk_summary, walk_table
+from klaw_ocp.walk import simulate_walk
+
+METHODS = ["multiple-shooting", "plain-shooting"]
+
+
+def natural(steps=3, **walk):
+    return {"name": "t", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": steps, **walk}}
+
+
+@pytest.fixture(scope="module", params=METHODS)
+def natural_walk(request):
+    return simulate_walk(natural(3), method=request.param)
+
+
+def test_every_subphase_meets_its_final_conditions(natural_walk):
+    assert natural_walk.status == "ok"
+    assert len(natural_walk.steps) == 3
+    for step in natural_walk.steps:
+        assert [s.name for s in step.subphases] == ["stance", "swing1", "swing2", "swing3"]
+        for sub in step.subphases:
+            assert sub.residual <= 1e-6, (step.index, sub.name, sub.residual)
+
+
+def test_final_conditions_are_the_eq3_values(natural_walk):
+    for step in natural_walk.steps:
+        con = step.plan.constraints
+        x = step.subphase("stance").final_state
+        assert x[0] == pytest.approx(con.w, abs=1e-8)
+        assert x[1] == pytest.approx(con.theta1, abs=1e-8)
+        assert step.subphase("swing1").final_state[6] == pytest.approx(con.theta3, abs=1e-8)
+        assert step.subphase("swing2").final_state[7] == pytest.approx(0.0, abs=1e-8)
+        assert step.subphase("swing3").final_state[6] == pytest.approx(con.theta3, abs=1e-8)
+
+
+def test_mean_speed_and_hip_sinusoid(natural_walk):
+    table = walk_table(natural_walk)
+    speed = 3.6 * (table["hip_x"][-1] - table["hip_x"][0]) / (table["t"][-1] - table["t"][0])
+    assert speed == pytest.approx(5.0, rel=0.05)
+    y = table["hip_y"]
+    excursion = y.max() - y.min()
+    assert 0.01 < excursion < 0.08
+    # one minimum per step: the hip is lowest around heel strike, highest near mid-step
+    for step in natural_walk.steps:
+        rows = table["step"] == step.index
+        t = table["t"][rows] - step.t_start
+        ys = y[rows]
+        interior = (t > 0.2 * step.plan.timings.t_step) & (t < 0.8 * step.plan.timings.t_step)
+        assert ys[interior].min() > ys.min()
+        assert ys[interior].max() == pytest.approx(ys.max())
+
+
+def test_toe_clears_the_ground_in_swing2(natural_walk):
+    clearance = natural_walk.spec.attributes.toe_clearance
+    for step in natural_walk.steps:
+        assert step.subphase("swing2").path_min >= -1e-7
+        assert step.heel_clearance_min > -1e-6
+        assert clearance > 0
+
+
+def test_both_modes_find_the_same_torques():
+    walks = [simulate_walk(natural(2), method=m) for m in METHODS]
+    for a, b in zip(walks[0].steps, walks[1].steps):
+        for sa, sb in zip(a.subphases, b.subphases):
+            for key, value in sa.parameters.items():
+                other = sb.parameters[key]
+                assert other == pytest.approx(value, rel=1e-6, abs=1e-7), (a.index, sa.name, key)
+    ya, yb = (walk_table(w)["hip_y"] for w in walks)
+    assert np.max(np.abs(ya - yb)) < 0.01
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_start_from_rest(method):
+    walk = simulate_walk(natural(2, speed=2.0, start_from_rest=True), method=method)
+    assert walk.status == "ok"
+    x0 = walk.initial_state
+    assert np.allclose(x0[3:], 0.0) and x0[1] == 0.0
+    assert max(s.residual for step in walk.steps for s in step.subphases) <= 1e-6
+
+
+def test_schedule_accelerates():
+    cfg = natural(4)
+    cfg["walk"]["schedule"] = [{"step": 0, "speed": 3.0}, {"step": 3, "speed": 5.0}]
+    walk = simulate_walk(cfg)
+    lengths = [s.plan.constraints.step_length for s in walk.steps]
+    assert lengths == sorted(lengths) and lengths[-1] > lengths[0]
+    assert max(s.residual for step in walk.steps for s in step.subphases) <= 1e-6
+
+
+def test_failure_keeps_completed_steps(monkeypatch):
+    from klaw_ocp.control.step import StepController
+    original = StepController.solve_step
+
+    def failing(self, plan, inp, index):
+        if index == 1:
+            raise ConvergenceError(1, "swing2", 0.25, "forced")
+        return original(self, plan, inp, index)
+
+    monkeypatch.setattr(StepController, "solve_step", failing)
+    with pytest.raises(ConvergenceError) as info:
+        simulate_walk(natural(3))
+    err = info.value
+    assert (err.step, err.subphase, err.residual) == (1, "swing2", 0.25)
+    assert "step 1" in str(err) and "swing2" in str(err)
+    assert len(err.partial.steps) == 1 and err.partial.status == "failed"
+    summary = walk_summary(err.partial)
+    assert summary["status"] == "failed" and summary["steps_completed"] == 1
