@@ -161,12 +161,54 @@ def _format_table(body: Body, plans: list[StepPlan], name: str | None) -> str:
     return "\n".join(lines)
 
 
+# -------------------------------------------------------------------------------------- run
+
+EXIT_NOT_CONVERGED = 1
+
+
+def _configure_run(p: argparse.ArgumentParser) -> None:
+    p.description = ("Simulate the configured walk step by step and write summary.json and "
+                     "dynamics.csv to --out (default results/<name>/). A subphase that does not "
+                     "converge is reported on one line (step, subphase, residual); the steps "
+                     "completed before it are still written, and the exit code is 1.")
+    p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: results/<name>/)")
+    p.add_argument("--method", choices=("multiple-shooting", "plain-shooting"),
+                   help="solver mode (default: the config's solver.method)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .config import load_config
+    from .errors import ConvergenceError
+    from .io import write_walk
+    from .walk import simulate_walk, walk_spec
+
+    config = load_config(args.config)
+    out = args.out or config.output_dir()
+    spec = walk_spec(config, args.method)
+    try:
+        walk = simulate_walk(spec, progress=not args.quiet)
+    except ConvergenceError as exc:
+        paths = write_walk(exc.partial, out)
+        print(f"{PROG}: error: {exc}; {len(exc.partial.steps)} completed step(s) written to "
+              f"{paths['summary'].parent}", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    paths = write_walk(walk, out)
+    rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
+    print(f"{spec.name}: {len(walk.steps)} steps, {walk.duration:.2f} s of walking in {walk.wall_s:.2f} s "
+          f"({rtf:.1f}x real time, {spec.method}); wrote {paths['summary']} and {paths['dynamics']}")
+    return 0
+
+
 # ----------------------------------------------------------------------------- registry, main
 
 #: Every subcommand by name. Another command is one more entry here.
 SUBCOMMANDS: dict[str, Subcommand] = {
     "plan": Subcommand(help="plan a walk: parameters (eq. 1), timings (eq. 2), constraints (eq. 3)",
                        configure=_configure_plan, handler=_cmd_plan),
+    "run": Subcommand(help="simulate a configured walk and write its result files",
+                      configure=_configure_run, handler=_cmd_run),
 }
 
 
@@ -182,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``klaw-ocp``; returns the exit code (0 ok, 2 bad input)."""
+    """Run ``klaw-ocp``; returns the exit code (0 ok, 1 a subphase did not converge, 2 bad input)."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -49,14 +49,20 @@ def leg_angles(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[float, f
     return beta - math.acos(max(-1.0, min(1.0, cos_delta))), math.acos(max(-1.0, min(1.0, cos_knee)))
 
 
+#: The hind leg reaches its ankle with the knee this little bent (hip-ankle distance 0.1 % short
+#: of l1, about 5 degrees of flexion): a fully straight knee is a singular point of the inverse
+#: kinematics, where the knee angle's rate at toe-off would be ill-defined.
+REACH_FRACTION = 1 - 1e-3
+
+
 def reach_pitch(body: Body, hip: np.ndarray, metatarsal_x: float) -> float:
-    """Smallest foot pitch at which the straight leg reaches the ankle (0 if it reaches it flat)."""
-    reach = lambda p: float(np.hypot(*(hind_ankle(body, metatarsal_x, p) - hip))) - body.l1 * (1 - 1e-9)
+    """Smallest foot pitch at which the leg reaches the ankle (0 if it reaches it flat)."""
+    reach = lambda p: float(np.hypot(*(hind_ankle(body, metatarsal_x, p) - hip))) - body.l1 * REACH_FRACTION
     if reach(0.0) <= 0:
         return 0.0
     if reach(math.radians(89)) > 0:
         return math.radians(89)
-    return brentq(reach, 0.0, math.radians(89), xtol=1e-13)
+    return brentq(reach, 0.0, math.radians(89), xtol=1e-15)
 
 
 @dataclass(frozen=True)

@@ -134,10 +134,11 @@ class StepController:
                 ds[key].append(val)
         x_to = stance_at(t_to)
         hip_to, hip_vel_to = hip_world(x_to)
-        eps = 1e-6
+        eps = 1e-5   # central difference of the kinematic hind leg along the hip's motion
         leg_to = hind_leg(b, hip_to, mt_x, t_to, t_to, pitch0, pitch_to)
         leg_before = hind_leg(b, hip_to - eps * hip_vel_to, mt_x, t_to - eps, t_to, pitch0, pitch_to)
-        th3d_to = (leg_to.theta3 - leg_before.theta3) / eps
+        leg_after = hind_leg(b, hip_to + eps * hip_vel_to, mt_x, t_to + eps, t_to, pitch0, pitch_to)
+        th3d_to = (leg_after.theta3 - leg_before.theta3) / (2 * eps)
 
         # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
         theta5_to = ankle_angle(leg_to.theta3 + leg_to.theta4, leg_to.pitch)
@@ -146,7 +147,7 @@ class StepController:
         hip_t1, _ = hip_world(stance_at(t1))
         knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
         # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
-        ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 1e-3)
+        ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 0.01 * b.l1)
         a0, x0 = leg_to.ankle[1], leg_to.ankle[0]
         d_travel, a_min = ankle_t1[0] - x0, ankle_t1[1]
         a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
@@ -157,7 +158,7 @@ class StepController:
         ctx.update(stance_F_theta1=stance.parameters["F_theta1_magnitude"],
                    stance_pa_offset=stance.parameters["pa_offset"], origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
-                   foot_from_time=t1, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
+                   foot_from_time=t2, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
                    theta6_impact=theta6_hs, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
                    tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
                    swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),

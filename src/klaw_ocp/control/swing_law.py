@@ -17,8 +17,8 @@ States (stance part first, see :mod:`.stance_law`):
 - swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
   holding spring-damper plus a small constant moment that brings the heel down in time.
 
-The kinematic foot (ankle angle theta5, toe angle theta6) is interpolated linearly in time from its
-values at t1 to its heel-strike values (§4.3; see control/double_support.py for swing1).
+The kinematic foot (ankle angle theta5, toe angle theta6) keeps its t1 angles through swing2 and is
+interpolated linearly to its heel-strike values in swing3 (§4.3; control/double_support.py for swing1).
 """
 from __future__ import annotations
 
@@ -64,10 +64,11 @@ def stance_part(xs, t, c):
 
 
 def foot_angles(t, c):
-    """theta5, theta6 interpolated linearly from their values at ``foot_from_time`` to heel strike
-    (§4.3; the foot's own motion before t1 does not enter the dynamics)."""
+    """theta5, theta6: held at their t1 values until ``foot_from_time`` (t2), then interpolated
+    linearly to their heel-strike values (§4.3). Holding them while the knee extends keeps the
+    dorsiflexion that let the toe clear the ground at t1 (see control/double_support.py)."""
     n = names(c)
-    s = (t - n.foot_from_time) / (n.swing_end_time - n.foot_from_time)
+    s = ca.fmax(0, (t - n.foot_from_time) / (n.swing_end_time - n.foot_from_time))
     return (n.theta5_from + s * (n.theta5_impact - n.theta5_from),
             n.theta6_from + s * (n.theta6_impact - n.theta6_from))
 

@@ -108,15 +108,79 @@ class MultipleShootingSolver:
     def _params(self, pb: SubphaseProblem, u_all) -> np.ndarray:
         return np.concatenate([pb.x0, pb.grid, pb.context, u_all])
 
-    def _initial_states(self, pb: SubphaseProblem) -> np.ndarray:
-        if pb.state_guess is not None and pb.state_guess.shape == (self.intervals + 1, pb.spec.nx):
-            return np.asarray(pb.state_guess)[1:]
+    def _simulate(self, pb: SubphaseProblem, u: np.ndarray) -> np.ndarray:
         traj = trajectory_function(pb.spec, self.substeps, self.intervals)
-        h = np.diff(pb.grid)
-        xs = traj(pb.x0, pb.grid[:-1], h, np.tile(pb.guess[:, None], (1, self.intervals)),
+        xs = traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, self.intervals)),
                   np.tile(pb.context[:, None], (1, self.intervals)))
-        xs = np.asarray(xs).T
-        return np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
+        return np.asarray(xs).T
+
+    def _initial_guess(self, pb: SubphaseProblem, free: list) -> tuple[np.ndarray, np.ndarray]:
+        """Free parameters and node states to start Newton from.
+
+        A simulation with the given guess initialises the nodes. When its final conditions are
+        far off (a cold start), a few damped Newton steps on the single-shooting residual
+        (finite differences) first bring the parameters near the root, so that the node states
+        start on a trajectory that nearly satisfies them.
+        """
+        u = pb.guess.copy()
+        final = lambda xs: np.asarray(pb.spec.final(xs[-1], pb.context)).ravel()
+        xs = self._simulate(pb, u)
+        res = final(xs)
+        for _ in range(8):
+            if not np.all(np.isfinite(res)) or np.max(np.abs(res)) < 1e-3 or len(free) != res.size:
+                break
+            jac = np.empty((res.size, len(free)))
+            for j, i in enumerate(free):
+                du = 1e-4 * abs(pb.scale[i]) or 1e-6
+                trial = u.copy(); trial[i] += du
+                jac[:, j] = (final(self._simulate(pb, trial)) - res) / du
+            try:
+                step = np.linalg.solve(jac, -res)
+            except np.linalg.LinAlgError:
+                break
+            for damping in (1.0, 0.5, 0.25, 0.125):
+                trial = u.copy(); trial[free] += damping * step
+                xs_trial = self._simulate(pb, trial)
+                res_trial = final(xs_trial)
+                if np.all(np.isfinite(res_trial)) and np.max(np.abs(res_trial)) < np.max(np.abs(res)):
+                    u, xs, res = trial, xs_trial, res_trial
+                    break
+            else:
+                break
+        if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
+            u, xs = self._bracket_guess(pb, free[0], u, final)
+        if pb.state_guess is not None and pb.state_guess.shape == (self.intervals + 1, pb.spec.nx):
+            xs = np.asarray(pb.state_guess)[1:]
+        return u, np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
+
+    def _bracket_guess(self, pb, i, u, final, tol: float = 1e-4):
+        """One free unknown whose single-shooting residual Newton could not reduce (a trajectory
+        near a kinematic singularity): scan outwards for a sign change, then bisect it."""
+        def f(value):
+            trial = u.copy(); trial[i] = value
+            xs = self._simulate(pb, trial)
+            return float(final(xs)[0]), trial, xs
+        f0, best_u, best_xs = f(u[i])
+        if not np.isfinite(f0):
+            return u, best_xs
+        scale = abs(pb.scale[i]) or 1.0
+        for k in range(12):
+            for sign in (-1.0, 1.0):
+                b = u[i] + sign * scale * 2.0 ** (k - 2)
+                fb, trial, xs = f(b)
+                if np.isfinite(fb) and fb * f0 <= 0:
+                    a, fa = u[i], f0
+                    for _ in range(200):
+                        m = 0.5 * (a + b)
+                        fm, trial, xs = f(m)
+                        if abs(fm) < tol or abs(b - a) < 1e-15 * max(1.0, abs(m)):
+                            break
+                        if fm * fa <= 0:
+                            b = m
+                        else:
+                            a, fa = m, fm
+                    return trial, xs
+        return best_u, best_xs
 
     def _finish(self, pb, z, u, iterations, wall0, message, success_hint) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
@@ -141,13 +205,27 @@ class MultipleShootingSolver:
         spec, n = pb.spec, self.intervals
         free_mask = tuple(not f for f in pb.fixed)
         rf = _rootfinder(spec, n, self.substeps, free_mask, self.tolerance, self.max_iterations)
-        z0 = np.concatenate([self._initial_states(pb).ravel(), pb.guess[list(free_mask)]])
+        free = [i for i, f in enumerate(free_mask) if f]
+        u0, xs0 = self._initial_guess(pb, free)
+        z0 = np.concatenate([xs0.ravel(), u0[free]])
         z = np.asarray(rf(z0, self._params(pb, pb.guess))).ravel()
         stats = rf.stats()
         u = pb.guess.copy()
         u[list(free_mask)] = z[n * spec.nx:]
-        return self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), wall0,
-                            "", bool(stats.get("success", True)))
+        result = self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), wall0,
+                              "", bool(stats.get("success", True)))
+        if not result.success and len(free) == 1:
+            # Newton on the full system can stall where swing1's kinematic knee is near-singular;
+            # a single-shooting root of the same discretisation has zero defects, so it solves
+            # the same equations. Polish it by bisection on the one free parameter.
+            final = lambda xs: np.asarray(spec.final(xs[-1], pb.context)).ravel()
+            u_ss, xs = self._bracket_guess(pb, free[0], u0, final, tol=self.tolerance)
+            z_ss = np.concatenate([xs.ravel(), u_ss[free]])
+            polished = self._finish(pb, z_ss, u_ss, result.iterations, wall0, "", True)
+            if polished.success:
+                polished.message = "Newton stalled; single-shooting root of the same equations"
+                return polished
+        return result
 
     def _solve_ipopt(self, pb: SubphaseProblem, wall0: float, start: SubphaseSolution | None) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
@@ -155,7 +233,8 @@ class MultipleShootingSolver:
         if start is not None and np.all(np.isfinite(start.states)):
             z0 = np.concatenate([start.states[1:].ravel(), [start.parameters[k] for k in spec.unknown_names]])
         else:
-            z0 = np.concatenate([self._initial_states(pb).ravel(), pb.guess])
+            u0, xs0 = self._initial_guess(pb, [])
+            z0 = np.concatenate([xs0.ravel(), u0])
         weights = np.array([1.0 if f else 0.0 for f in pb.fixed])
         params = np.concatenate([self._params(pb, pb.guess), pb.guess, pb.scale, weights])
         n_eq = n * spec.nx + spec.final.size1_out(0)

@@ -150,16 +150,28 @@ class PlainShootingSolver:
         f1 = f(x0 + delta); shots += 1
         slope = (f1 - f0) / delta
         direction = -np.sign(f0 * slope) if np.isfinite(slope) and slope != 0 else 1.0
-        a, fa = x0, f0
-        step = delta
-        b, fb = x0 + direction * step, f(x0 + direction * step); shots += 1
-        while fa * fb > 0 and shots < self.max_iterations:
-            a, fa = b, fb
-            step *= 2.0
-            b = x0 + direction * step
-            fb = f(b); shots += 1
-        if fa * fb > 0 or not np.isfinite(fb):
-            return (a if abs(fa) < abs(fb) else b), min(fa, fb, key=abs), shots
+        # Expand a bracket on both sides of x0, doubling the step, the slope's side first: the
+        # first sign change met is the root nearest the guess (a far one can be a different
+        # motion, e.g. the leg swinging round). A shot that blew up halves that side's step.
+        steps = {direction: delta, -direction: delta}
+        last = {direction: (x0, f0), -direction: (x0, f0)}
+        a = b = None
+        while shots < self.max_iterations and a is None:
+            for side in (direction, -direction):
+                xa, fa_side = last[side]
+                xb = xa + side * steps[side]
+                fb_side = f(xb); shots += 1
+                if not np.isfinite(fb_side):
+                    steps[side] *= 0.5
+                    continue
+                if fa_side * fb_side <= 0:
+                    a, fa, b, fb = xa, fa_side, xb, fb_side
+                    break
+                last[side] = (xb, fb_side)
+                steps[side] *= 2.0
+        if a is None:
+            best = min(last.values(), key=lambda p: abs(p[1]))
+            return best[0], best[1], shots
         # bisection only until the bracket is a "reasonable approximation" (2 % of the scale)
         for _ in range(self.bisection_steps):
             if abs(b - a) <= 0.02 * abs(scale):
@@ -192,6 +204,9 @@ class PlainShootingSolver:
         pairs = [(i, j) for i, j in pb.spec.pairing if not pb.fixed[i]]
         residual = self._final(pb, u)[0]
         shots += 1
+        if len(pairs) == 2 and np.all(np.isfinite(residual)):
+            pairs, n = self._choose_pairing(pb, u, residual, pairs)
+            shots += n
         probes = {i: 0.0 for i, _ in pairs}
         for _ in range(self.max_sweeps):
             worst = float(np.max(np.abs(residual)))
@@ -204,12 +219,31 @@ class PlainShootingSolver:
                     trial = u.copy(); trial[i] = value
                     return float(self._final(pb, trial)[0][j])
                 old = u[i]
-                u[i], _, n = self._solve_1d(f, u[i], pb.scale[i], tol, min(2 * probes[i], 0.05 * abs(pb.scale[i])))
+                u[i], value, n = self._solve_1d(f, u[i], pb.scale[i], tol, min(2 * probes[i], 0.05 * abs(pb.scale[i])))
+                if not np.isfinite(value):
+                    u[i] = old
                 probes[i] = abs(u[i] - old) or 1e-6 * abs(pb.scale[i])
                 shots += n
             residual = self._final(pb, u)[0]
             shots += 1
         return u, residual, shots
+
+    def _choose_pairing(self, pb, u, residual, pairs):
+        """Pair each unknown with the condition it moves most, relative to the other pairing.
+
+        Gauss-Seidel sweeps contract by |J12 J21 / (J11 J22)| per sweep; when that exceeds 1 for
+        the spec's pairing (it can, at slow walks), the swapped pairing contracts instead.
+        """
+        (i0, j0), (i1, j1) = pairs
+        jac = np.zeros((2, 2))
+        for col, i in enumerate((i0, i1)):
+            du = 1e-4 * abs(pb.scale[i]) or 1e-6
+            trial = u.copy(); trial[i] += du
+            jac[:, col] = (self._final(pb, trial)[0][[j0, j1]] - residual[[j0, j1]]) / du
+        direct, swapped = abs(jac[0, 0] * jac[1, 1]), abs(jac[0, 1] * jac[1, 0])
+        if np.isfinite(direct + swapped) and swapped > direct:
+            return [(i0, j1), (i1, j0)], 2
+        return pairs, 2
 
     def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
         wall0 = time.perf_counter()
