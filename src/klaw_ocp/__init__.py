@@ -2,5 +2,13 @@
 from .body import Body
 from .errors import ConfigError, ConvergenceError, GaitLimitError, KlawError
 
-__all__ = ["Body", "KlawError", "ConfigError", "GaitLimitError", "ConvergenceError"]
+
+def simulate_walk(spec, method=None, progress=False, raise_on_failure=True):
+    """Run a walk (see :func:`klaw_ocp.walk.simulate_walk`); imported lazily to keep
+    ``import klaw_ocp`` free of CasADi builds."""
+    from .walk import simulate_walk as run
+    return run(spec, method=method, progress=progress, raise_on_failure=raise_on_failure)
+
+
+__all__ = ["Body", "KlawError", "ConfigError", "GaitLimitError", "ConvergenceError", "simulate_walk"]
 __version__ = "0.1.0"
