@@ -199,36 +199,67 @@ class PlainShootingSolver:
         return x, fx, shots
 
     def _solve_free(self, pb: SubphaseProblem, u: np.ndarray):
-        """Gauss-Seidel sweeps of 1-D solves over the (unknown, condition) pairs."""
+        """Gauss-Seidel sweeps of 1-D solves; from a far guess, along a homotopy.
+
+        When the sweeps fail from the guess u0 (a cold start far from the root, e.g. the first
+        stance of a slow walk), they are repeated on the shifted problems
+        g(u) - (1 - lam) g(u0) = 0 for lam = 1/16, 2/16, ..., 1, each started from the last root:
+        every stage starts close to its root, which is where bisection and secant are reliable.
+        """
+        start = u.copy()
+        u1, residual, shots = self._sweeps(pb, u.copy(), None)
+        if np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance:
+            return u1, residual, shots
+        offset0 = self._final(pb, start)[0]
+        shots += 1
+        if not np.all(np.isfinite(offset0)):
+            return u1, residual, shots
+        u = start
+        for lam in np.linspace(1 / 16, 1.0, 16):
+            u, residual, n = self._sweeps(pb, u, (1 - lam) * offset0)
+            shots += n
+            if not np.all(np.isfinite(residual)):
+                break
+        return u, residual, shots
+
+    def _sweeps(self, pb: SubphaseProblem, u: np.ndarray, offset):
+        """Gauss-Seidel sweeps of 1-D solves over the (unknown, condition) pairs, for the final
+        conditions minus ``offset`` (None: the real problem). Returns the unshifted residual."""
+        shift = np.zeros(pb.spec.final.size1_out(0)) if offset is None else offset
+        final = lambda trial: self._final(pb, trial)[0] - shift
         shots = 0
         pairs = [(i, j) for i, j in pb.spec.pairing if not pb.fixed[i]]
-        residual = self._final(pb, u)[0]
+        residual = final(u)
         shots += 1
         if len(pairs) == 2 and np.all(np.isfinite(residual)):
-            pairs, n = self._choose_pairing(pb, u, residual, pairs)
+            pairs, n = self._choose_pairing(pb, u, residual, pairs, final)
             shots += n
         probes = {i: 0.0 for i, _ in pairs}
+        history = []
         for _ in range(self.max_sweeps):
             worst = float(np.max(np.abs(residual)))
-            if worst <= self.tolerance:
+            if not np.isfinite(worst) or worst <= self.tolerance:
                 break
+            history.append(worst)
+            if len(history) > 3 and history[-1] > 0.95 * history[-4]:
+                break   # not contracting: leave it to the homotopy (or report the failure)
             # inexact sweeps: each 1-D solve only needs to beat the current coupling error
             tol = max(self.tolerance, 0.01 * worst) if len(pairs) > 1 else self.tolerance
             for i, j in pairs:
                 def f(value, i=i, j=j):
                     trial = u.copy(); trial[i] = value
-                    return float(self._final(pb, trial)[0][j])
+                    return float(final(trial)[j])
                 old = u[i]
                 u[i], value, n = self._solve_1d(f, u[i], pb.scale[i], tol, min(2 * probes[i], 0.05 * abs(pb.scale[i])))
                 if not np.isfinite(value):
                     u[i] = old
                 probes[i] = abs(u[i] - old) or 1e-6 * abs(pb.scale[i])
                 shots += n
-            residual = self._final(pb, u)[0]
+            residual = final(u)
             shots += 1
-        return u, residual, shots
+        return u, residual + shift, shots
 
-    def _choose_pairing(self, pb, u, residual, pairs):
+    def _choose_pairing(self, pb, u, residual, pairs, final):
         """Pair each unknown with the condition it moves most, relative to the other pairing.
 
         Gauss-Seidel sweeps contract by |J12 J21 / (J11 J22)| per sweep; when that exceeds 1 for
@@ -239,7 +270,7 @@ class PlainShootingSolver:
         for col, i in enumerate((i0, i1)):
             du = 1e-4 * abs(pb.scale[i]) or 1e-6
             trial = u.copy(); trial[i] += du
-            jac[:, col] = (self._final(pb, trial)[0][[j0, j1]] - residual[[j0, j1]]) / du
+            jac[:, col] = (final(trial)[[j0, j1]] - residual[[j0, j1]]) / du
         direct, swapped = abs(jac[0, 0] * jac[1, 1]), abs(jac[0, 1] * jac[1, 0])
         if np.isfinite(direct + swapped) and swapped > direct:
             return [(i0, j1), (i1, j0)], 2
