@@ -89,7 +89,10 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
     for _ in range(30):
         if abs(f1) < tol or f1 == f0:
             break
-        v0, v1, f0 = v1, v1 - f1 * (v1 - v0) / (f1 - f0), f1
+        # a secant step limited to 20 % of the mean speed: far from the orbit the first stance
+        # may have no solution at all
+        step = float(np.clip(-f1 * (v1 - v0) / (f1 - f0), -0.2 * mean, 0.2 * mean))
+        v0, v1, f0 = v1, v1 + step, f1
         f1 = mismatch(v1)
     return _walking_state(con, v1, theta2)
 

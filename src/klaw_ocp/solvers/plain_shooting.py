@@ -156,8 +156,11 @@ class PlainShootingSolver:
         steps = {direction: delta, -direction: delta}
         last = {direction: (x0, f0), -direction: (x0, f0)}
         a = b = None
-        while shots < self.max_iterations and a is None:
+        reach = 100.0 * (abs(scale) or 1.0)   # a root further away is another motion entirely
+        while shots < self.max_iterations and a is None and min(steps.values()) <= reach:
             for side in (direction, -direction):
+                if steps[side] > reach:
+                    continue
                 xa, fa_side = last[side]
                 xb = xa + side * steps[side]
                 fb_side = f(xb); shots += 1
@@ -210,6 +213,11 @@ class PlainShootingSolver:
         u1, residual, shots = self._sweeps(pb, u.copy(), None)
         if np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance:
             return u1, residual, shots
+        if sum(not f for f in pb.fixed) > 1:
+            u2, residual2, n = self._broyden(pb, start.copy())
+            shots += n
+            if np.all(np.isfinite(residual2)) and np.max(np.abs(residual2)) <= self.tolerance:
+                return u2, residual2, shots
         offset0 = self._final(pb, start)[0]
         shots += 1
         if not np.all(np.isfinite(offset0)):
@@ -258,6 +266,42 @@ class PlainShootingSolver:
             residual = final(u)
             shots += 1
         return u, residual + shift, shots
+
+    def _broyden(self, pb, u):
+        """The secant method in several unknowns (Broyden's update of a finite-difference
+        Jacobian, backtracking on |residual|): when the one-at-a-time sweeps do not contract."""
+        free = [i for i, f in enumerate(pb.fixed) if not f]
+        rows = [j for i, j in pb.spec.pairing if not pb.fixed[i]]
+        final = lambda trial: self._final(pb, trial)[0]
+        res = final(u)[rows]
+        shots = 1
+        if not np.all(np.isfinite(res)):
+            return u, final(u), shots
+        jac = np.zeros((len(rows), len(free)))
+        for col, i in enumerate(free):
+            du = 1e-4 * abs(pb.scale[i]) or 1e-6
+            trial = u.copy(); trial[i] += du
+            jac[:, col] = (final(trial)[rows] - res) / du
+            shots += 1
+        for _ in range(self.max_iterations):
+            if np.max(np.abs(res)) <= self.tolerance:
+                break
+            try:
+                step = np.linalg.solve(jac, -res)
+            except np.linalg.LinAlgError:
+                break
+            for damping in (1.0, 0.5, 0.25, 0.125, 0.0625):
+                trial = u.copy(); trial[free] += damping * step
+                new = final(trial)[rows]
+                shots += 1
+                if np.all(np.isfinite(new)) and np.max(np.abs(new)) < np.max(np.abs(res)):
+                    break
+            else:
+                break
+            ds, dr = damping * step, new - res
+            jac += np.outer(dr - jac @ ds, ds) / (ds @ ds)
+            u, res = trial, new
+        return u, final(u), shots + 1
 
     def _choose_pairing(self, pb, u, residual, pairs, final):
         """Pair each unknown with the condition it moves most, relative to the other pairing.
