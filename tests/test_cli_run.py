@@ -6,7 +6,6 @@ import pytest
 import yaml
 
 from klaw_ocp.cli import main
-from klaw_ocp.errors import ConvergenceError
 
 REQUIRED_COLUMNS = {"t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d",
                     "theta2d", "theta3d", "theta4d", "hip_x", "hip_y", "F_w", "F_theta1", "F_theta2",
@@ -43,16 +42,8 @@ def test_run_writes_summary_and_dynamics(short_config, tmp_path, capsys):
     assert "2 steps" in capsys.readouterr().out
 
 
-def test_run_failure_writes_completed_steps(short_config, tmp_path, capsys, monkeypatch):
-    from klaw_ocp.control.step import StepController
-    original = StepController.solve_step
-
-    def failing(self, plan, inp, index):
-        if index == 1:
-            raise ConvergenceError(1, "swing2", 0.031, "forced for the test")
-        return original(self, plan, inp, index)
-
-    monkeypatch.setattr(StepController, "solve_step", failing)
+def test_run_failure_writes_completed_steps(short_config, tmp_path, capsys, fail_at_step):
+    fail_at_step(1, "swing2", 0.031)
     out = tmp_path / "out"
     assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 1
     err = capsys.readouterr().err.strip().splitlines()

@@ -94,16 +94,8 @@ def test_schedule_accelerates():
     assert max(s.residual for step in walk.steps for s in step.subphases) <= 1e-6
 
 
-def test_failure_keeps_completed_steps(monkeypatch):
-    from klaw_ocp.control.step import StepController
-    original = StepController.solve_step
-
-    def failing(self, plan, inp, index):
-        if index == 1:
-            raise ConvergenceError(1, "swing2", 0.25, "forced")
-        return original(self, plan, inp, index)
-
-    monkeypatch.setattr(StepController, "solve_step", failing)
+def test_failure_keeps_completed_steps(fail_at_step):
+    fail_at_step(1, "swing2", 0.25)
     with pytest.raises(ConvergenceError) as info:
         simulate_walk(natural(3))
     err = info.value
