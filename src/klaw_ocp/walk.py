@@ -143,11 +143,12 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     try:
         inp = _first_input(controller, spec)
         walk.initial_state = inp.x0.copy()
-        for k in iterator:
-            plan = spec.plans[k]
-            result: StepResult = controller.solve_step(plan, inp, k)
+        plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
+        for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
+            plan = plans[k]
+            result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
             walk.steps.append(result)
-            inp = _next_input(spec, plan, result, spec.plans[k + 1] if k + 1 < len(spec.plans) else None)
+            inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
     except ConvergenceError as err:
         walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
         err.partial = walk
@@ -158,6 +159,18 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     return walk
 
 
+def closing_plan(spec: WalkSpec):
+    """The step that ends a walk at rest: the swing foot lands beside the stance foot (eq. 3 with
+    sl = 0, so theta1 = 0 and w = l1 at the end) at the last step's frequency, and the stance
+    ends with theta1d = 0 (a braking level of F_theta1 after 0.4 t_step)."""
+    from .gait import StepPlan, step_constraints
+    from .gait.parameters import LocomotionParameters
+    last = spec.plans[-1]
+    params = LocomotionParameters(0.0, 0.0, last.parameters.step_frequency_spm)
+    con = step_constraints(spec.body, 0.0, spec.attributes, ankle_x=last.constraints.next_ankle_x, closing=True)
+    return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step)
+
+
 def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInput | None:
     """Heel strike: the swing leg lands at the next stance origin; map the stance state onto it."""
     if next_plan is None:
@@ -166,7 +179,8 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     x_post = heel_strike_map(b, result.final_stance_state, np.array([con.step_length, 0.0]))
     y_start = con.hip_y - b.l9
     y_end = next_plan.constraints.hip_y - b.l9
-    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, _excursion(b, spec.attributes, y_start, y_end))
+    excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
+    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion)
 
 
 def walk_spec(config, method: str | None = None) -> WalkSpec:

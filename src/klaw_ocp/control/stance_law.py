@@ -46,6 +46,8 @@ def stance_forces(x, t, u, c):
     pa = position_actuator(u[1] * late_extension(t, n.t_step), n.k_y, n.c_y, y_ref, yd_ref, y, yd)
     f_w = leg_force(w, wd, n.k_w, n.v_w, n.l1, pa)
     f_th1 = step_torque(t, n.t_off, u[0])
+    if u.numel() > 2:   # closing step: a braking level after t_off brings the leg to rest
+        f_th1 = f_th1 + u[2] - step_torque(t, n.t_off, u[2])
     f_th2 = spring_damper(th2, th2d, n.k_t, n.d_t, n.theta2_ref)
     return ca.vertcat(f_w, f_th1, f_th2), pa
 
@@ -69,10 +71,11 @@ def stance_rhs(x, t, u, c):
     return ca.vertcat(x[3:6], qdd)
 
 
-def stance_final_conditions(x, c):
-    """theta1 and w at t_step minus their eq. 3 values."""
+def stance_final_conditions(x, c, at_rest: bool = False):
+    """theta1 and w at t_step minus their eq. 3 values (and theta1d for a stop at rest)."""
     n = _names(c, STANCE_CONTEXT)
-    return ca.vertcat(x[1] - n.theta1_target, x[0] - n.w_target)
+    conditions = [x[1] - n.theta1_target, x[0] - n.w_target]
+    return ca.vertcat(*conditions, x[4]) if at_rest else ca.vertcat(*conditions)
 
 
 def _names(c, layout: VectorLayout):

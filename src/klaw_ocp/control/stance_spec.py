@@ -65,24 +65,29 @@ def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
 
 
 @lru_cache(maxsize=None)
-def stance_spec(lock_rule: str = "momentum") -> SubphaseSpec:
-    """The stance :class:`SubphaseSpec` (built once per lock rule)."""
+def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseSpec:
+    """The stance :class:`SubphaseSpec` (built once per lock rule).
+
+    ``at_rest``: the closing stance of a walk that ends standing: a third unknown, the F_theta1
+    level after 0.4 t_step, brings theta1d to zero at t_step.
+    """
+    nu = 3 if at_rest else 2
     x, t = ca.SX.sym("x", 6), ca.SX.sym("t")
-    u, c = ca.SX.sym("u", 2), ca.SX.sym("c", len(STANCE_CONTEXT))
+    u, c = ca.SX.sym("u", nu), ca.SX.sym("c", len(STANCE_CONTEXT))
     forces, pa = stance_forces(x, t, u, c)
     args = [x, t, u, c]
-    events = stance_lock_events(6, 2, len(STANCE_CONTEXT), lock_rule)
+    events = stance_lock_events(6, nu, len(STANCE_CONTEXT), lock_rule)
     return SubphaseSpec(
         name="stance",
         state_names=STANCE_STATE.names,
-        unknown_names=STANCE_UNKNOWNS.names,
+        unknown_names=STANCE_UNKNOWNS.names + (("F_theta1_brake",) if at_rest else ()),
         context_names=STANCE_CONTEXT.names,
         rhs=ca.Function("stance_rhs", args, [stance_rhs(*args)]),
-        final=ca.Function("stance_final", [x, c], [stance_final_conditions(x, c)]),
+        final=ca.Function("stance_final", [x, c], [stance_final_conditions(x, c, at_rest)]),
         outputs=ca.Function("stance_outputs", args, [ca.vertcat(forces, pa)]),
         output_names=STANCE_FORCES,
         path=ca.Function("stance_path", args, [c[_L1] - x[0]]),
         path_names=("l1_minus_w",),
         events=events,
-        pairing=((0, 0), (1, 1)),
+        pairing=((0, 0), (1, 1), (2, 2)) if at_rest else ((0, 0), (1, 1)),
     )

@@ -91,13 +91,21 @@ class StepController:
     def _guess(self, name: str, nu: int) -> np.ndarray:
         return self.guesses.get(name, np.zeros(nu)).copy()
 
-    def solve_stance(self, plan, inp: StepInput, index: int) -> SubphaseSolution:
+    def solve_stance(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> SubphaseSolution:
+        """The stance of a step; ``at_rest``: the closing stance that ends with theta1d = 0."""
         t = plan.timings
         grid = time_grid(0.0, t.t_step, self.n, self._breakpoints(plan))
         ctx = STANCE_CONTEXT.pack(self.stance_context(plan, inp))
-        problem = SubphaseProblem(self.stance_spec, inp.x0, grid, ctx, self._guess("stance", 2),
-                                  self.scales["stance"], step=index)
-        return self._solve(index, problem)
+        spec, guess, scale = self.stance_spec, self._guess("stance", 2), self.scales["stance"]
+        if at_rest:
+            spec, guess, scale = stance_spec(self.lock_rule, True), np.append(guess, 0.0), np.append(scale, scale[0])
+        problem = SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale, step=index)
+        solution = self.solver.solve(problem)
+        if not solution.success:
+            raise ConvergenceError(index, "stance", solution.residual, solution.message)
+        if not at_rest:
+            self.guesses["stance"] = np.array([solution.parameters[k] for k in spec.unknown_names])
+        return solution
 
     @staticmethod
     def _breakpoints(plan) -> list:
@@ -105,9 +113,9 @@ class StepController:
         return [t.t_theta1_off, t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end]
 
     # -- the whole step ------------------------------------------------------------------------
-    def solve_step(self, plan, inp: StepInput, index: int) -> StepResult:
+    def solve_step(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StepResult:
         b, a, t, con = self.body, self.attrs, plan.timings, plan.constraints
-        stance = self.solve_stance(plan, inp, index)
+        stance = self.solve_stance(plan, inp, index, at_rest)
         sctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hip_fn = stance_functions()["hip"]
@@ -156,7 +164,9 @@ class StepController:
 
         ctx = dict(sctx)
         ctx.update(stance_F_theta1=stance.parameters["F_theta1_magnitude"],
-                   stance_pa_offset=stance.parameters["pa_offset"], origin_x=origin[0], origin_y=origin[1],
+                   stance_pa_offset=stance.parameters["pa_offset"],
+                   stance_F_theta1_brake=stance.parameters.get("F_theta1_brake", 0.0),
+                   origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
                    foot_from_time=t2, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
                    theta6_impact=theta6_hs, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,

@@ -35,7 +35,7 @@ from .torques import decaying_exponential, spring_damper
 
 SWING_CONTEXT = VectorLayout(
     STANCE_CONTEXT,
-    ["stance_F_theta1", "stance_pa_offset", "origin_x", "origin_y", "l8", "l9", "l12", "l13",
+    ["stance_F_theta1", "stance_pa_offset", "stance_F_theta1_brake", "origin_x", "origin_y", "l8", "l9", "l12", "l13",
      "toe_off_time", "swing_end_time", "foot_from_time", "theta5_from", "theta5_impact", "theta6_from",
      "theta6_impact",
      "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
@@ -54,7 +54,7 @@ def names(c) -> SimpleNamespace:
 def stance_part(xs, t, c):
     """Stance rates, its forces, and the hip's world position, velocity and acceleration."""
     n = names(c)
-    u_stance = ca.vertcat(n.stance_F_theta1, n.stance_pa_offset)
+    u_stance = ca.vertcat(n.stance_F_theta1, n.stance_pa_offset, n.stance_F_theta1_brake)
     stance_c = c[: len(STANCE_CONTEXT)]
     force, pa = stance_forces(xs, t, u_stance, stance_c)
     qdd = stance_accelerations_sx(xs[0:3], xs[3:6], force, body_vector(c), n.locked)

@@ -86,7 +86,7 @@ def _finite(field: str, value, allowed: str, positive: bool) -> float:
 
 
 def step_constraints(body: Body, step_length, attributes: LocomotionAttributes | None = None,
-                     ankle_x=0.0) -> StepConstraints:
+                     ankle_x=0.0, closing: bool = False) -> StepConstraints:
     """The heel-strike final conditions (w, θ1, θ3) of a step of length ``step_length`` (eq. 3).
 
     Args:
@@ -99,7 +99,11 @@ def step_constraints(body: Body, step_length, attributes: LocomotionAttributes |
         ConfigError: sl is not a finite number > 0, or ankle_x is not finite.
         GaitLimitError: the landing leg cannot reach the ground at that step length.
     """
-    sl = _finite("walk.step_length", step_length, "a finite number > 0 in m", positive=True)
+    # closing=True: the last step of a walk that ends at rest, which lands the swing foot beside
+    # the stance foot (sl = 0: theta1 = 0 and w = l1 at theta5_impact = 90 deg)
+    sl = _finite("walk.step_length", step_length, "a finite number > 0 in m", positive=not closing)
+    if sl < 0:
+        raise ConfigError(out_of_range("walk.step_length", sl, "a finite number >= 0 in m"))
     x_a = _finite("ankle_x", ankle_x, "a finite number in m", positive=False)
     attrs = resolve(attributes)
     th5 = attrs.rad("theta5_impact")
