@@ -11,9 +11,9 @@ def fail_at_step(monkeypatch):
     original = StepController.solve_step
 
     def arm(index: int, subphase: str, residual: float):
-        def failing(self, plan, inp, k):
+        def failing(self, plan, inp, k, at_rest=False):
             if k == index:
                 raise ConvergenceError(index, subphase, residual, "forced for the test")
-            return original(self, plan, inp, k)
+            return original(self, plan, inp, k, at_rest)
         monkeypatch.setattr(StepController, "solve_step", failing)
     return arm

@@ -104,3 +104,20 @@ def test_failure_keeps_completed_steps(fail_at_step):
     assert len(err.partial.steps) == 1 and err.partial.status == "failed"
     summary = walk_summary(err.partial)
     assert summary["status"] == "failed" and summary["steps_completed"] == 1
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_start_and_stop_at_rest(method):
+    """Fig. 8: a walk that starts standing and ends standing (closing step with sl = 0)."""
+    walk = simulate_walk(natural(2, speed=2.0, start_from_rest=True, end_at_rest=True), method=method)
+    assert walk.status == "ok" and len(walk.steps) == 3          # 2 planned steps + the closing step
+    closing = walk.steps[-1]
+    assert closing.plan.constraints.step_length == 0.0
+    x = closing.subphase("stance").final_state
+    body = walk.spec.body
+    # standing over the ankle: eq. 3 with sl = 0 gives w = l1 (to Table B-1's rounding of l11)
+    assert x[0] == pytest.approx(closing.plan.constraints.w, abs=1e-8) and abs(x[1]) < 1e-8
+    assert x[0] == pytest.approx(body.l1, rel=1e-4)
+    assert abs(x[4]) < 1e-8 and abs(x[3]) < 0.02                             # theta1d = 0, wd ~ 0
+    assert "F_theta1_brake" in closing.subphase("stance").parameters
+    assert max(s.residual for step in walk.steps for s in step.subphases) <= 1e-6

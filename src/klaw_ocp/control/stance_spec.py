@@ -76,7 +76,9 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
     u, c = ca.SX.sym("u", nu), ca.SX.sym("c", len(STANCE_CONTEXT))
     forces, pa = stance_forces(x, t, u, c)
     args = [x, t, u, c]
-    events = stance_lock_events(6, nu, len(STANCE_CONTEXT), lock_rule)
+    # The closing stance ends standing with w = l1 while theta1 < 0: reaching l1 there is the goal,
+    # not the early plantar flexion the lock rule guards against, so it has no lock events.
+    events = () if at_rest else stance_lock_events(6, nu, len(STANCE_CONTEXT), lock_rule)
     return SubphaseSpec(
         name="stance",
         state_names=STANCE_STATE.names,

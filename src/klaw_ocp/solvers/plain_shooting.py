@@ -277,30 +277,42 @@ class PlainShootingSolver:
         shots = 1
         if not np.all(np.isfinite(res)):
             return u, final(u), shots
-        jac = np.zeros((len(rows), len(free)))
-        for col, i in enumerate(free):
-            du = 1e-4 * abs(pb.scale[i]) or 1e-6
-            trial = u.copy(); trial[i] += du
-            jac[:, col] = (final(trial)[rows] - res) / du
-            shots += 1
+        def fd_jacobian(u, res):
+            jac = np.zeros((len(rows), len(free)))
+            for col, i in enumerate(free):
+                du = 1e-4 * abs(pb.scale[i]) or 1e-6
+                trial = u.copy(); trial[i] += du
+                jac[:, col] = (final(trial)[rows] - res) / du
+            return jac
+
+        jac, fresh = fd_jacobian(u, res), True
+        shots += len(free)
         for _ in range(self.max_iterations):
             if np.max(np.abs(res)) <= self.tolerance:
                 break
             try:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
-                break
-            for damping in (1.0, 0.5, 0.25, 0.125, 0.0625):
-                trial = u.copy(); trial[free] += damping * step
-                new = final(trial)[rows]
-                shots += 1
-                if np.all(np.isfinite(new)) and np.max(np.abs(new)) < np.max(np.abs(res)):
+                step = None
+            accepted = False
+            if step is not None:
+                for damping in (1.0, 0.5, 0.25, 0.125, 0.0625):
+                    trial = u.copy(); trial[free] += damping * step
+                    new = final(trial)[rows]
+                    shots += 1
+                    if np.all(np.isfinite(new)) and np.linalg.norm(new) < np.linalg.norm(res):
+                        accepted = True
+                        break
+            if not accepted:
+                if fresh:
                     break
-            else:
-                break
+                # Broyden's update drifted: refresh the Jacobian by finite differences once
+                jac, fresh = fd_jacobian(u, res), True
+                shots += len(free)
+                continue
             ds, dr = damping * step, new - res
             jac += np.outer(dr - jac @ ds, ds) / (ds @ ds)
-            u, res = trial, new
+            u, res, fresh = trial, new, False
         return u, final(u), shots + 1
 
     def _choose_pairing(self, pb, u, residual, pairs, final):
