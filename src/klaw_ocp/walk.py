@@ -92,8 +92,15 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
         # a secant step limited to 20 % of the mean speed: far from the orbit the first stance
         # may have no solution at all
         step = float(np.clip(-f1 * (v1 - v0) / (f1 - f0), -0.2 * mean, 0.2 * mean))
-        v0, v1, f0 = v1, v1 + step, f1
-        f1 = mismatch(v1)
+        for _ in range(6):   # a trial speed whose stance has no solution: go half as far
+            try:
+                f_new = mismatch(v1 + step)
+                break
+            except ConvergenceError:
+                step *= 0.5
+        else:
+            raise ConvergenceError(0, "stance", abs(f1), "no periodic start found (initial hip speed)")
+        v0, v1, f0, f1 = v1, v1 + step, f1, f_new
     return _walking_state(con, v1, theta2)
 
 

@@ -1,0 +1,64 @@
+"""Issue #4 acceptance on full walks (slow: run with ``pytest -m slow``).
+
+The default run covers the same mechanisms on short walks (tests/test_walk.py: both modes, the
+torque agreement, start and stop, a schedule); these run the paper's walks at full length and
+the whole range of speeds and body heights.
+"""
+import numpy as np
+import pytest
+
+from klaw_ocp.results import walk_table
+from klaw_ocp.walk import simulate_walk
+
+pytestmark = pytest.mark.slow
+METHODS = ["multiple-shooting", "plain-shooting"]
+
+
+def walk_of(method, height=1.8, steps=4, **walk):
+    return simulate_walk({"name": "a", "body": {"height": height, "mass": 80}, "walk": {"steps": steps, **walk}},
+                         method=method)
+
+
+def max_residual(walk):
+    return max(s.residual for step in walk.steps for s in step.subphases)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("speed", [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+def test_speed_range(method, speed):
+    walk = walk_of(method, speed=speed)
+    assert walk.status == "ok" and max_residual(walk) <= 1e-6
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("height", [1.5, 2.0])
+def test_body_heights(method, height):
+    walk = walk_of(method, height=height, speed=5.0)
+    assert walk.status == "ok" and max_residual(walk) <= 1e-6
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("step_length", [0.50, 1.05])
+def test_fig10_short_and_long_steps(method, step_length):
+    walk = walk_of(method, speed=5.0, step_length=step_length, steps=6)
+    assert walk.status == "ok" and max_residual(walk) <= 1e-6
+
+
+@pytest.mark.parametrize("config", ["configs/start_stop_2kmh.yaml", "configs/start_stop_5kmh.yaml",
+                                    "configs/accelerate.yaml"])
+@pytest.mark.parametrize("method", METHODS)
+def test_fig8_and_schedules(method, config):
+    walk = simulate_walk(config, method=method)
+    assert walk.status == "ok" and max_residual(walk) <= 1e-6
+
+
+def test_twelve_second_natural_walk_in_both_modes():
+    walks = [simulate_walk("configs/natural_walk.yaml", method=m) for m in METHODS]
+    tables = [walk_table(w) for w in walks]
+    for walk, table in zip(walks, tables):
+        assert walk.status == "ok" and max_residual(walk) <= 1e-6
+        assert walk.duration >= 12.0
+        speed = 3.6 * (table["hip_x"][-1] - table["hip_x"][0]) / (table["t"][-1] - table["t"][0])
+        assert speed == pytest.approx(5.0, rel=0.05)
+        assert 0.01 < np.ptp(table["hip_y"]) < 0.08
+    assert np.max(np.abs(tables[0]["hip_y"] - tables[1]["hip_y"])) < 0.01
