@@ -14,6 +14,8 @@ The context ``c`` (:data:`STANCE_CONTEXT`) holds the body, the gains and the ste
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import casadi as ca
 
 from ..body import DYNAMIC_PARAMETER_NAMES
@@ -79,5 +81,4 @@ def stance_final_conditions(x, c, at_rest: bool = False):
 
 
 def _names(c, layout: VectorLayout):
-    from types import SimpleNamespace
     return SimpleNamespace(**{name: c[i] for i, name in enumerate(layout.names)})
