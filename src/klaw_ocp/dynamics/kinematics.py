@@ -27,6 +27,8 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+from functools import lru_cache
+
 import numpy as np
 
 from ._checks import as_scalar, as_vector, check_body, to_numpy
@@ -55,13 +57,22 @@ def foot_points_sx(ankle, shank_angle, theta5, theta6, l8, l9, l12, l13) -> dict
     return {"heel": heel, "metatarsal": metatarsal, "toe": toe}
 
 
+@lru_cache(maxsize=None)
+def _foot_function() -> ca.Function:
+    """:func:`foot_points_sx` as one Function: a numeric call costs one evaluation, not a graph
+    of DM operations (the swing1 end posture calls it inside root searches)."""
+    ankle, angles, dims = ca.SX.sym("ankle", 2), ca.SX.sym("angles", 3), ca.SX.sym("dims", 4)
+    pts = foot_points_sx(ankle, angles[0], angles[1], angles[2], dims[0], dims[1], dims[2], dims[3])
+    return ca.Function("foot_points", [ankle, angles, dims], [pts["heel"], pts["metatarsal"], pts["toe"]])
+
+
 def foot_points(body, ankle, shank_angle, theta5, theta6=0.0) -> dict:
     """Numeric :func:`foot_points_sx` for a :class:`~klaw_ocp.body.Body`: ``{heel, metatarsal, toe}``."""
     body = check_body(body)
     ankle = as_vector("ankle", ankle, 2)
-    pts = foot_points_sx(ankle, as_scalar("shank_angle", shank_angle), as_scalar("theta5", theta5),
-                         as_scalar("theta6", theta6), body.l8, body.l9, body.l12, body.l13)
-    return {k: to_numpy(v) for k, v in pts.items()}
+    angles = [as_scalar("shank_angle", shank_angle), as_scalar("theta5", theta5), as_scalar("theta6", theta6)]
+    pts = _foot_function()(ankle, angles, [body.l8, body.l9, body.l12, body.l13])
+    return {k: to_numpy(v) for k, v in zip(("heel", "metatarsal", "toe"), pts)}
 
 
 def swing_leg_points(body, q, hip, theta5=math.pi / 2, theta6=0.0) -> dict:
