@@ -80,7 +80,7 @@ def walk_summary(walk) -> dict:
     steps = []
     for step in walk.steps:
         entry = step.plan.as_dict()
-        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min,
+        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min, notes=list(step.notes),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
         entry["subphases"] = [{
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),

@@ -9,8 +9,9 @@ their eq. 3 values at t_step. Lock rules, as events of the forward integration:
 - The lock "at the desired length towards the end" is the final condition itself: the boundary
   value solvers reach w = w(eq. 3) exactly at t_step, where the leg then locks (docs/solvers.md).
 
-For multiple shooting the same rule is a path constraint ``l1 - w >= 0`` on the nodes where
-theta1 < 0, imposed only when the square solution breaks it.
+Multiple shooting does not enforce the lock rule yet (it needs the stance with pa free over
+the grid, an IPOPT formulation still to come); a walk whose solution breaks the rule says so in
+its step notes (``control.step.lock_rule_notes``). None of the paper's walks triggers it.
 """
 from __future__ import annotations
 
@@ -88,8 +89,6 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
         final=ca.Function("stance_final", [x, c], [stance_final_conditions(x, c, at_rest)]),
         outputs=ca.Function("stance_outputs", args, [ca.vertcat(forces, pa)]),
         output_names=STANCE_FORCES,
-        path=ca.Function("stance_path", args, [c[_L1] - x[0]]),
-        path_names=("l1_minus_w",),
         events=events,
         pairing=((0, 0), (1, 1), (2, 2)) if at_rest else ((0, 0), (1, 1)),
     )

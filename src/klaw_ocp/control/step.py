@@ -55,6 +55,21 @@ class StepResult:
         return next(s for s in self.subphases if s.name == name)
 
 
+def lock_rule_notes(stance: SubphaseSolution, l1: float) -> list:
+    """Where a stance solution without lock events lets the leg grow through l1 while theta1 < 0.
+
+    Plain shooting locks the leg there (an event); the multiple-shooting stance does not enforce
+    the rule yet, so a walk reports it instead of hiding it.
+    """
+    if stance.events:
+        return [f"stance lock events: {', '.join(f'{n} at t={t:.3f} s' for n, t in stance.events)}"]
+    w, theta1 = stance.states[:, 0], stance.states[:, 1]
+    for k in range(len(w) - 1):
+        if w[k] < l1 <= w[k + 1] and theta1[k] < 0:
+            return [f"lock rule not enforced: w passes l1 at t={stance.t[k + 1]:.3f} s while theta1 < 0"]
+    return []
+
+
 class StepController:
     """Builds and solves the subphase problems of successive steps with one solver."""
 
@@ -196,6 +211,7 @@ class StepController:
             self.scales["swing3"], step=index))
         heel = [float(specs["swing3"].path(s3.states[k], s3.t[k], [s3.parameters["F_theta3_moment"]], c))
                 for k in range(len(s3.t) - 1)]
+        notes = lock_rule_notes(stance, b.l1)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, s1, s2, s3],
                           double_support={k: np.array(v) for k, v in ds.items()},
@@ -203,4 +219,4 @@ class StepController:
                                    "D": d_travel, "x0": x0, "coefficients": coeffs.tolist(),
                                    "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
                           final_stance_state=stance.final_state, heel_clearance_min=min(heel) if heel else 0.0,
-                          plan=plan)
+                          plan=plan, notes=notes)
