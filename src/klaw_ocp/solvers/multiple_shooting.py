@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec
+from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, path_margin
 
 
 def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
@@ -193,7 +193,7 @@ class MultipleShootingSolver:
                      for k in range(n))
         forces = np.array([np.asarray(spec.outputs(states[k], pb.grid[k], u, pb.context)).ravel()
                            for k in range(n + 1)])
-        path_min = _path_margin(pb, states, u)
+        path_min = path_margin(pb, states, u)
         ok = success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9) and np.all(np.isfinite(states))
         msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
         return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
@@ -270,18 +270,3 @@ class MultipleShootingSolver:
                 return result
             return self._solve_ipopt(pb, wall0, result if result.success else None)
         return result
-
-
-def _path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
-    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality).
-
-    Samples off the grid (event nodes of plain shooting) use the bound of the node before them.
-    """
-    spec = pb.spec
-    if spec.path is None or pb.path_lower is None:
-        return float("inf")
-    times = pb.grid if times is None else np.asarray(times)
-    node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
-    margins = [np.asarray(spec.path(states[k], times[k], u, pb.context)).ravel() - pb.path_lower[node[k]]
-               for k in range(len(times))]
-    return float(np.min(margins))

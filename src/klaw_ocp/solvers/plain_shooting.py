@@ -22,8 +22,7 @@ import numpy as np
 from functools import lru_cache
 
 from .integrator import interval_function, trajectory_function
-from .multiple_shooting import _path_margin
-from .problem import SubphaseProblem, SubphaseSolution
+from .problem import SubphaseProblem, SubphaseSolution, path_margin
 
 
 class PlainShootingSolver:
@@ -340,7 +339,7 @@ class PlainShootingSolver:
         if pb.recovery_step is not None and pb.path_lower is not None:
             while recovery < self.max_recovery_steps:
                 times, states, _, _ = self.simulate(pb, u)
-                if _path_margin(pb, states, u, times) >= 0:
+                if path_margin(pb, states, u, times) >= 0:
                     break
                 u = u + np.asarray(pb.recovery_step)
                 u, residual, n = self._solve_free(pb, u)
@@ -351,7 +350,7 @@ class PlainShootingSolver:
         res = float(np.max(np.abs(residual))) if np.all(np.isfinite(residual)) else float("inf")
         forces = np.array([np.asarray(pb.spec.outputs(states[k], times[k], u, c)).ravel()
                            for k in range(len(times))])
-        path_min = _path_margin(pb, states, u, times)
+        path_min = path_margin(pb, states, u, times)
         ok = res <= max(10 * self.tolerance, 1e-9) and path_min >= -1e-7
         msg = "" if ok else (f"residual {res:.3g}" + (f", path constraint violated by {-path_min:.3g}"
                                                        if path_min < -1e-7 else ""))

@@ -158,3 +158,18 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
     for a, b, k in zip(edges[:-1], edges[1:], counts):
         nodes.extend(np.linspace(a, b, k + 1)[1:])
     return np.array(nodes)
+
+
+def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
+    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality).
+
+    Samples off the grid (event nodes of plain shooting) use the bound of the node before them.
+    """
+    spec = pb.spec
+    if spec.path is None or pb.path_lower is None:
+        return float("inf")
+    times = pb.grid if times is None else np.asarray(times)
+    node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
+    margins = [np.asarray(spec.path(states[k], times[k], u, pb.context)).ravel() - pb.path_lower[node[k]]
+               for k in range(len(times))]
+    return float(np.min(margins))
