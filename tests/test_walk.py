@@ -1,5 +1,4 @@
 """The walk (issue #4): both solver modes, chained steps, acceptance properties on short walks."""
-import math
 
 import numpy as np
 import pytest

@@ -26,7 +26,7 @@ import numpy as np
 from .body import Body
 from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
-from .dynamics import heel_strike_map, stance_functions
+from .dynamics import heel_strike_map, stance_hip
 from .errors import ConvergenceError
 from .solvers import make_solver
 
@@ -63,11 +63,6 @@ class Walk:
         return sum(s.plan.timings.t_step for s in self.steps)
 
 
-def _hip_velocity(x: np.ndarray) -> np.ndarray:
-    _, vel, _ = stance_functions()["hip"](x[:3], x[3:6], np.zeros(3))
-    return np.asarray(vel).ravel()
-
-
 def _walking_state(con, speed: float, theta2: float) -> np.ndarray:
     """Heel-strike stance state (mirror of eq. 3) with a horizontal hip velocity ``speed``."""
     w, th = con.w, -con.theta1
@@ -82,7 +77,7 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
     def mismatch(speed):
         inp.x0 = _walking_state(con, speed, theta2)
         stance = controller.solve_stance(plan, inp, 0)
-        return _hip_velocity(stance.final_state)[0] - speed
+        return stance_hip(controller.body, stance.final_state, np.zeros(2))[1][0] - speed
 
     v0, v1 = 1.2 * mean, 1.35 * mean
     f0, f1 = mismatch(v0), mismatch(v1)

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-import casadi as ca
 import numpy as np
 
 
@@ -27,17 +26,12 @@ class VectorLayout:
     def __len__(self) -> int:
         return len(self.names)
 
-    def symbols(self, label: str):
-        """An SX vector and a namespace naming its entries."""
-        vec = ca.SX.sym(label, len(self))
-        return vec, SimpleNamespace(**{n: vec[i] for i, n in enumerate(self.names)})
+    def bind(self, vector) -> SimpleNamespace:
+        """Name the entries of a (symbolic) vector laid out this way: ``layout.bind(c).t_step``."""
+        return SimpleNamespace(**{n: vector[i] for i, n in enumerate(self.names)})
 
     def pack(self, values: dict) -> np.ndarray:
         missing = [n for n in self.names if n not in values]
         if missing:
             raise KeyError(f"missing values for {missing}")
         return np.array([float(values[n]) for n in self.names])
-
-    def unpack(self, vector) -> dict:
-        vector = np.asarray(vector, dtype=float).ravel()
-        return {n: float(vector[i]) for i, n in enumerate(self.names)}

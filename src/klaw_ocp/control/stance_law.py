@@ -14,8 +14,6 @@ The context ``c`` (:data:`STANCE_CONTEXT`) holds the body, the gains and the ste
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import casadi as ca
 
 from ..body import DYNAMIC_PARAMETER_NAMES
@@ -40,7 +38,7 @@ def body_vector(c: ca.SX) -> ca.SX:
 
 def stance_forces(x, t, u, c):
     """Generalized forces [F_w, F_theta1, F_theta2] and the actuator pa at state x, time t."""
-    n = _names(c, STANCE_CONTEXT)
+    n = STANCE_CONTEXT.bind(c)
     w, th1, th2, wd, th1d, th2d = (x[i] for i in range(6))
     y = w * ca.cos(th1)                      # hip height above the ankle
     yd = wd * ca.cos(th1) - w * th1d * ca.sin(th1)
@@ -67,7 +65,7 @@ def late_extension(t, t_step):
 
 def stance_rhs(x, t, u, c):
     """dx/dt of the closed-loop stance model."""
-    n = _names(c, STANCE_CONTEXT)
+    n = STANCE_CONTEXT.bind(c)
     force, _ = stance_forces(x, t, u, c)
     qdd = stance_accelerations_sx(x[0:3], x[3:6], force, body_vector(c), n.locked)
     return ca.vertcat(x[3:6], qdd)
@@ -75,10 +73,6 @@ def stance_rhs(x, t, u, c):
 
 def stance_final_conditions(x, c, at_rest: bool = False):
     """theta1 and w at t_step minus their eq. 3 values (and theta1d for a stop at rest)."""
-    n = _names(c, STANCE_CONTEXT)
+    n = STANCE_CONTEXT.bind(c)
     conditions = [x[1] - n.theta1_target, x[0] - n.w_target]
     return ca.vertcat(*conditions, x[4]) if at_rest else ca.vertcat(*conditions)
-
-
-def _names(c, layout: VectorLayout):
-    return SimpleNamespace(**{name: c[i] for i, name in enumerate(layout.names)})

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..body import Body
-from ..dynamics import knee_lock_map, stance_functions
+from ..dynamics import knee_lock_map, stance_hip
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
@@ -96,11 +96,13 @@ class StepController:
                    theta1_target=plan.constraints.theta1, w_target=plan.constraints.w)
         return ctx
 
-    def _solve(self, step: int, problem: SubphaseProblem) -> SubphaseSolution:
+    def _solve(self, step: int, problem: SubphaseProblem, remember: bool = True) -> SubphaseSolution:
+        """Solve; raise ConvergenceError on failure; keep the parameters to start the next step."""
         solution = self.solver.solve(problem)
         if not solution.success:
             raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message)
-        self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
+        if remember:
+            self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
         return solution
 
     def _guess(self, name: str, nu: int) -> np.ndarray:
@@ -114,13 +116,8 @@ class StepController:
         spec, guess, scale = self.stance_spec, self._guess("stance", 2), self.scales["stance"]
         if at_rest:
             spec, guess, scale = stance_spec(self.lock_rule, True), np.append(guess, 0.0), np.append(scale, scale[0])
-        problem = SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale, step=index)
-        solution = self.solver.solve(problem)
-        if not solution.success:
-            raise ConvergenceError(index, "stance", solution.residual, solution.message)
-        if not at_rest:
-            self.guesses["stance"] = np.array([solution.parameters[k] for k in spec.unknown_names])
-        return solution
+        # the closing stance has a third unknown: it must not seed the next walk's stances
+        return self._solve(index, SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale), remember=not at_rest)
 
     @staticmethod
     def _breakpoints(plan) -> list:
@@ -133,15 +130,13 @@ class StepController:
         stance = self.solve_stance(plan, inp, index, at_rest)
         sctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
-        hip_fn = stance_functions()["hip"]
 
         def stance_at(time):
             k = int(np.argmin(np.abs(stance.t - time)))
             return stance.states[k]
 
         def hip_world(x):
-            pos, vel, _ = hip_fn(x[:3], x[3:6], np.zeros(3))
-            return origin + np.asarray(pos).ravel(), np.asarray(vel).ravel()
+            return stance_hip(b, x[:6], origin)
 
         # hind leg: toe on the ground, foot pitching about the metatarsal head until toe-off
         t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
@@ -192,8 +187,7 @@ class StepController:
         specs = self.swing_specs
         s1 = self._solve(index, SubphaseProblem(
             specs["swing1"], np.concatenate([x_to, [leg_to.theta3, leg_to.theta4, th3d_to]]),
-            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c, self._guess("swing1", 1), self.scales["swing1"],
-            step=index))
+            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c, self._guess("swing1", 1), self.scales["swing1"]))
         x_end1 = s1.final_state
         th4d = float(np.asarray(specs["swing1"].rhs(x_end1, t1, [s1.parameters["F_theta3_magnitude"]], c)).ravel()[7])
         guess2 = self._guess("swing2", 2)
@@ -201,14 +195,14 @@ class StepController:
         s2 = self._solve(index, SubphaseProblem(
             specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c,
             guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance]),
-            recovery_step=np.array([0.0, -0.005]), step=index))
+            recovery_step=np.array([0.0, -0.005])))
         x_end2 = s2.final_state
         knee = knee_lock_map(b, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         th3d_locked = knee[2]
         s3 = self._solve(index, SubphaseProblem(
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c, self._guess("swing3", 1),
-            self.scales["swing3"], step=index))
+            self.scales["swing3"]))
         heel = [float(specs["swing3"].path(s3.states[k], s3.t[k], [s3.parameters["F_theta3_moment"]], c))
                 for k in range(len(s3.t) - 1)]
         notes = lock_rule_notes(stance, b.l1)

@@ -22,8 +22,6 @@ interpolated linearly to its heel-strike values in swing3 (§4.3; control/double
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import casadi as ca
 
 from ..dynamics.kinematics import foot_points_sx
@@ -47,8 +45,8 @@ SWING2_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "
 SWING3_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta3d")
 
 
-def names(c) -> SimpleNamespace:
-    return SimpleNamespace(**{n: c[i] for i, n in enumerate(SWING_CONTEXT.names)})
+def names(c):
+    return SWING_CONTEXT.bind(c)
 
 
 def stance_part(xs, t, c):

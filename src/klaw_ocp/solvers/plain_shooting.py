@@ -85,10 +85,9 @@ class PlainShootingSolver:
         """Index of the first interval on which an event armed in the initial mode fires."""
         first = None
         for event in spec.events:
-            values = np.array([float(event.fn(states[k], pb.grid[k], u, pb.context)) for k in range(len(states))]) \
-                if len(states) < 3 else np.asarray(_mapped(event, len(states))(
-                    states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
-                    np.tile(pb.context[:, None], (1, len(states))))).ravel()
+            values = np.asarray(_mapped(event, len(states))(
+                states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
+                np.tile(pb.context[:, None], (1, len(states))))).ravel()
             d = event.direction
             for k in range(len(states) - 1):
                 if first is not None and k >= first:

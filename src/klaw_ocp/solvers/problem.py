@@ -89,7 +89,6 @@ class SubphaseProblem:
     path_lower: Optional[np.ndarray] = None      # (nh,) or (N+1, nh); -inf disables a node
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
-    step: int = -1
 
     def __post_init__(self):
         self.x0 = np.asarray(self.x0, float).ravel()
