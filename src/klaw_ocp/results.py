@@ -17,6 +17,8 @@ import math
 
 import numpy as np
 
+from .dynamics import stance_hip
+
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 
@@ -28,11 +30,13 @@ def _rows_for_step(step, body) -> list[dict]:
     rates3 = np.gradient(ds["theta3"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
     rates4 = np.gradient(ds["theta4"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
 
+    ankle = np.array([step.origin_x, body.l9])
+
     def base(t, name, xs, forces):
-        w, th1 = xs[0], xs[1]
+        hip, _ = stance_hip(body, xs[:6], ankle)
         return {"t": step.t_start + t, "step": step.index, "subphase": name,
-                "w": w, "theta1": th1, "theta2": xs[2], "wd": xs[3], "theta1d": xs[4], "theta2d": xs[5],
-                "hip_x": step.origin_x + w * math.sin(th1), "hip_y": body.l9 + w * math.cos(th1),
+                "w": xs[0], "theta1": xs[1], "theta2": xs[2], "wd": xs[3], "theta1d": xs[4], "theta2d": xs[5],
+                "hip_x": hip[0], "hip_y": hip[1],
                 "F_w": forces[0], "F_theta1": forces[1], "F_theta2": forces[2], "pa": forces[3]}
 
     for k in range(len(ds["t"]) - 1):          # the toe-off node opens swing1
