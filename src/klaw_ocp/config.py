@@ -110,6 +110,9 @@ class SolverConfig(BaseModel):
     tolerance: float = Field(default=1e-9, gt=0, lt=1)
     max_iterations: int = Field(default=50, ge=1, le=10_000)
     nlp: Literal["auto", "rootfinder", "ipopt"] = "auto"
+    #: "monitored": the paper's stance (pa follows the hip sinusoid by feedback; square problem);
+    #: "tracking": pa free over the grid, IPOPT tracks the sinusoid under the hip floor (multiple shooting)
+    stance: Literal["monitored", "tracking"] = "monitored"
 
 
 class OutputConfig(BaseModel):

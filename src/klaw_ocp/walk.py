@@ -27,7 +27,7 @@ from .body import Body
 from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
 from .dynamics import heel_strike_map, stance_hip
-from .errors import ConvergenceError
+from .errors import ConfigError, ConvergenceError
 from .solvers import make_solver
 
 
@@ -46,6 +46,7 @@ class WalkSpec:
     start_from_rest: bool = False
     end_at_rest: bool = False
     lock_rule: str = "momentum"
+    stance: str = "monitored"
 
 
 @dataclass
@@ -132,11 +133,14 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
         spec = walk_spec(config, method)
     elif method is not None:
         spec = replace(spec, method=method)
+    if spec.stance == "tracking" and spec.method != "multiple-shooting":
+        raise ConfigError(f"solver.stance: got 'tracking' with method {spec.method!r}, allowed 'monitored' "
+                          "(the tracking stance is an optimal control problem; use method multiple-shooting)")
     wall0 = time.perf_counter()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)
     gains = control_gains(spec.body, spec.attributes)
-    controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule)
+    controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule, spec.stance)
     walk = Walk(spec)
     iterator = range(len(spec.plans))
     if progress:
@@ -191,4 +195,5 @@ def walk_spec(config, method: str | None = None) -> WalkSpec:
     return WalkSpec(name=config.name, body=config.body_model(), attributes=config.attributes_model(),
                     plans=config.plan(), method=method or solver.method, intervals=solver.intervals,
                     tolerance=solver.tolerance, max_iterations=solver.max_iterations, nlp=solver.nlp,
-                    start_from_rest=config.walk.start_from_rest, end_at_rest=config.walk.end_at_rest)
+                    start_from_rest=config.walk.start_from_rest, end_at_rest=config.walk.end_at_rest,
+                    stance=solver.stance)

@@ -1,13 +1,17 @@
 """The closed-loop stance dynamics of section 4.2, as one symbolic right-hand side.
 
 State ``x = [w, theta1, theta2, wd, theta1d, theta2d]`` (m, rad, rad, m/s, rad/s, rad/s),
-relative to the stance ankle. Free parameters ``u = [F_theta1 magnitude (N m), pa offset (m)]``.
-The context ``c`` (:data:`STANCE_CONTEXT`) holds the body, the gains and the step's numbers.
+relative to the stance ankle. The torque-shape parameters ``p`` (:data:`STANCE_PARAMETERS`) are the
+F_theta1 magnitude (N m), the pa offset (m), the closing step's braking level (N m) and the
+knots of a pa profile (m); the context ``c`` (:data:`STANCE_CONTEXT`) holds the body, the gains
+and the step's numbers.
 
-- F_theta1: step input of magnitude u[0], off at ``t_off`` = 0.4 t_step.
+- F_theta1: step input of the magnitude, off at ``t_off`` = 0.4 t_step.
 - F_w: spring-damper with position actuator ``pa`` (ERRATA 8). pa is monitored (§4.2): it is
   raised when the hip falls below the sinusoid of human walking and lowered when it rises above
-  it; the offset u[1] is what the solver chooses so that w reaches its eq. 3 value at t_step.
+  it; the offset is what the paper's solver chooses so that w reaches its eq. 3 value at t_step.
+  The profile (piecewise linear in t / t_step, zero in the paper's formulation) is "pa free over
+  the grid": the tracking formulation of the stance optimises it (control/stance_spec.py).
 - F_theta2: spring-damper that balances the upper body about ``theta2_ref``, applied directly as
   F_theta2 like the paper (ERRATA "Generalized forces").
 - ``locked`` = 1 gives the rigid leg (wdd = 0) of the lock rules.
@@ -19,16 +23,23 @@ import casadi as ca
 from ..body import DYNAMIC_PARAMETER_NAMES
 from ..dynamics.stance import stance_accelerations_sx
 from .layout import VectorLayout
-from .torques import hip_height_reference, leg_force, position_actuator, spring_damper, step_torque
+from .torques import (hip_height_reference, leg_force, piecewise_linear, position_actuator, spring_damper,
+                      step_torque)
 
 STANCE_STATE = VectorLayout(["w", "theta1", "theta2", "wd", "theta1d", "theta2d"])
-STANCE_UNKNOWNS = VectorLayout(["F_theta1_magnitude", "pa_offset"])
+#: intervals of the pa profile over the stance (its knots sit at t_step * i / PA_PROFILE_INTERVALS)
+PA_PROFILE_INTERVALS = 10
+PA_KNOTS = tuple(f"pa_knot_{i}" for i in range(PA_PROFILE_INTERVALS + 1))
+STANCE_PARAMETERS = VectorLayout(["F_theta1_magnitude", "pa_offset", "F_theta1_brake"], PA_KNOTS)
 STANCE_CONTEXT = VectorLayout(
     DYNAMIC_PARAMETER_NAMES,
     ["k_w", "v_w", "k_t", "d_t", "theta2_ref", "k_y", "c_y",
      "t_off", "t_step", "y_start", "y_end", "excursion", "locked", "theta1_target", "w_target"],
 )
 STANCE_FORCES = ("F_w", "F_theta1", "F_theta2", "pa")
+STANCE_PATH = ("leg_lock_margin", "hip_above_floor", "hip_vertical_velocity")
+#: hip-height error that costs as much as one unit of objective in the tracking formulation
+TRACKING_SCALE_M = 0.01
 
 
 def body_vector(c: ca.SX) -> ca.SX:
@@ -36,19 +47,25 @@ def body_vector(c: ca.SX) -> ca.SX:
     return c[: len(DYNAMIC_PARAMETER_NAMES)]
 
 
-def stance_forces(x, t, u, c):
-    """Generalized forces [F_w, F_theta1, F_theta2] and the actuator pa at state x, time t."""
-    n = STANCE_CONTEXT.bind(c)
-    w, th1, th2, wd, th1d, th2d = (x[i] for i in range(6))
-    y = w * ca.cos(th1)                      # hip height above the ankle
-    yd = wd * ca.cos(th1) - w * th1d * ca.sin(th1)
+def hip_height(x):
+    """Hip height above the stance ankle and its rate."""
+    w, th1, wd, th1d = x[0], x[1], x[3], x[4]
+    return w * ca.cos(th1), wd * ca.cos(th1) - w * th1d * ca.sin(th1)
+
+
+def stance_forces(x, t, p, c):
+    """Generalized forces [F_w, F_theta1, F_theta2] and the actuator pa at state x, time t, for
+    the parameter vector ``p`` laid out as :data:`STANCE_PARAMETERS`."""
+    n, q = STANCE_CONTEXT.bind(c), STANCE_PARAMETERS.bind(p)
+    y, yd = hip_height(x)
     y_ref, yd_ref = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion)
-    pa = position_actuator(u[1] * late_extension(t, n.t_step), n.k_y, n.c_y, y_ref, yd_ref, y, yd)
-    f_w = leg_force(w, wd, n.k_w, n.v_w, n.l1, pa)
-    f_th1 = step_torque(t, n.t_off, u[0])
-    if u.numel() > 2:   # closing step: a braking level after t_off brings the leg to rest
-        f_th1 = f_th1 + u[2] - step_torque(t, n.t_off, u[2])
-    f_th2 = spring_damper(th2, th2d, n.k_t, n.d_t, n.theta2_ref)
+    knots = [getattr(q, k) for k in PA_KNOTS]
+    command = q.pa_offset * late_extension(t, n.t_step) + piecewise_linear(t / n.t_step, knots)
+    pa = position_actuator(command, n.k_y, n.c_y, y_ref, yd_ref, y, yd)
+    f_w = leg_force(x[0], x[3], n.k_w, n.v_w, n.l1, pa)
+    # the closing step's braking level after t_off brings the leg to rest (0 in other steps)
+    f_th1 = step_torque(t, n.t_off, q.F_theta1_magnitude) + q.F_theta1_brake - step_torque(t, n.t_off, q.F_theta1_brake)
+    f_th2 = spring_damper(x[2], x[5], n.k_t, n.d_t, n.theta2_ref)
     return ca.vertcat(f_w, f_th1, f_th2), pa
 
 
@@ -63,12 +80,37 @@ def late_extension(t, t_step):
     return 0.5 * (1 - ca.cos(ca.pi * phase))
 
 
-def stance_rhs(x, t, u, c):
+def stance_rhs(x, t, p, c):
     """dx/dt of the closed-loop stance model."""
     n = STANCE_CONTEXT.bind(c)
-    force, _ = stance_forces(x, t, u, c)
+    force, _ = stance_forces(x, t, p, c)
     qdd = stance_accelerations_sx(x[0:3], x[3:6], force, body_vector(c), n.locked)
     return ca.vertcat(x[3:6], qdd)
+
+
+def stance_path(x, c):
+    """The stance inequalities, each >= a per-node lower bound (control/stance_spec.py says where):
+
+    - ``leg_lock_margin`` = l1 - w: the lock rule's "w > l1 too early" may not happen;
+    - ``hip_above_floor``: hip height minus the lower of the two heel-strike heights (§4: the hip
+      "must never be allowed to drop below its minimal value at heel strike");
+    - ``hip_vertical_velocity``: at t_step, so the hip meets the next heel strike at its lowest.
+    """
+    n = STANCE_CONTEXT.bind(c)
+    y, yd = hip_height(x)
+    return ca.vertcat(n.l1 - x[0], y - ca.fmin(n.y_start, n.y_end), yd)
+
+
+def tracking_cost(x, t, p, c):
+    """Running cost of the tracking formulation: the hip's squared distance from the sinusoid of
+    human walking (in units of :data:`TRACKING_SCALE_M`), plus a small price on kinks of the pa
+    profile so that the optimum is a smooth actuator, not a saw-tooth the grid cannot see."""
+    n, q = STANCE_CONTEXT.bind(c), STANCE_PARAMETERS.bind(p)
+    y, _ = hip_height(x)
+    y_ref, _ = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion)
+    knots = ca.vertcat(*[getattr(q, k) for k in PA_KNOTS])
+    kinks = ca.diff(ca.diff(knots))
+    return ((y - y_ref) / TRACKING_SCALE_M) ** 2 + 1e-2 * ca.sumsqr(kinks / TRACKING_SCALE_M)
 
 
 def stance_final_conditions(x, c, at_rest: bool = False):

@@ -1,17 +1,23 @@
 """The stance subphase as a boundary-value problem (section 4.2), with the paper's lock rules.
 
-Unknowns: the F_theta1 step magnitude and the pa offset. Final conditions: theta1 and w reach
-their eq. 3 values at t_step. Lock rules, as events of the forward integration:
+Two formulations of the same physics, differing in how pa is chosen:
+
+- **monitored** (the paper's): unknowns the F_theta1 step magnitude and the pa offset; pa follows
+  the hip-height sinusoid by feedback. Final conditions: theta1 and w reach their eq. 3 values at
+  t_step. A square problem (rootfinder, or bisection and secant).
+- **tracking** (the OCP form): pa is also free over the grid, as the knots of a piecewise-linear
+  profile; IPOPT minimises the hip's distance from the sinusoid subject to the same final
+  conditions, the lock rule and the hip floor (:func:`stance_path_bounds`).
+
+The paper's lock rules:
 
 - ``leg_too_long``: while theta1 < 0 the telescope may not grow past l1 ("if w > l1 occurs too early
-  ... the stance leg is locked"): an upward crossing of w = l1 locks the leg (wd -> 0).
+  ... the stance leg is locked"). Plain shooting locks the leg at the upward crossing (an event,
+  wd -> 0); multiple shooting keeps ``l1 - w >= 0`` on those nodes as a path constraint and, when
+  the square solution breaks it, re-solves with pa free (docs/solvers.md compares the two).
 - ``leg_vertical``: the lock is removed "as soon as the event theta1 > 0 occurs".
 - The lock "at the desired length towards the end" is the final condition itself: the boundary
   value solvers reach w = w(eq. 3) exactly at t_step, where the leg then locks (docs/solvers.md).
-
-Multiple shooting does not enforce the lock rule yet (it needs the stance with pa free over
-the grid, an IPOPT formulation still to come); a walk whose solution breaks the rule says so in
-its step notes (``control.step.lock_rule_notes``). None of the paper's walks triggers it.
 """
 from __future__ import annotations
 
@@ -23,8 +29,8 @@ import numpy as np
 from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
-from .stance_law import (STANCE_CONTEXT, STANCE_FORCES, STANCE_STATE, STANCE_UNKNOWNS, stance_final_conditions,
-                         stance_forces, stance_rhs)
+from .stance_law import (PA_KNOTS, STANCE_CONTEXT, STANCE_FORCES, STANCE_PARAMETERS, STANCE_PATH, STANCE_STATE,
+                         stance_final_conditions, stance_forces, stance_path, stance_rhs, tracking_cost)
 
 _LOCKED = STANCE_CONTEXT.index["locked"]
 _L1 = STANCE_CONTEXT.index["l1"]
@@ -65,6 +71,17 @@ def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
     )
 
 
+def stance_unknowns(at_rest: bool = False) -> tuple:
+    """Names of the stance unknowns: every :data:`STANCE_PARAMETERS` entry except the braking level,
+    which only the closing stance (``at_rest``) has."""
+    return tuple(n for n in STANCE_PARAMETERS.names if at_rest or n != "F_theta1_brake")
+
+
+def stance_fixed(at_rest: bool = False) -> tuple:
+    """Which unknowns the square (monitored) problem holds at their guess: the pa profile."""
+    return tuple(n in PA_KNOTS for n in stance_unknowns(at_rest))
+
+
 @lru_cache(maxsize=None)
 def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseSpec:
     """The stance :class:`SubphaseSpec` (built once per lock rule).
@@ -72,23 +89,60 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
     ``at_rest``: the closing stance of a walk that ends standing: a third unknown, the F_theta1
     level after 0.4 t_step, brings theta1d to zero at t_step.
     """
-    nu = 3 if at_rest else 2
+    names = stance_unknowns(at_rest)
+    nu = len(names)
     x, t = ca.SX.sym("x", 6), ca.SX.sym("t")
     u, c = ca.SX.sym("u", nu), ca.SX.sym("c", len(STANCE_CONTEXT))
-    forces, pa = stance_forces(x, t, u, c)
+    given = dict(zip(names, ca.vertsplit(u)))
+    p = ca.vertcat(*[given.get(n, 0) for n in STANCE_PARAMETERS.names])
+    forces, pa = stance_forces(x, t, p, c)
     args = [x, t, u, c]
     # The closing stance ends standing with w = l1 while theta1 < 0: reaching l1 there is the goal,
     # not the early plantar flexion the lock rule guards against, so it has no lock events.
     events = () if at_rest else stance_lock_events(6, nu, len(STANCE_CONTEXT), lock_rule)
+    pairs = ((0, 0), (1, 1), (2, 2)) if at_rest else ((0, 0), (1, 1))
     return SubphaseSpec(
         name="stance",
         state_names=STANCE_STATE.names,
-        unknown_names=STANCE_UNKNOWNS.names + (("F_theta1_brake",) if at_rest else ()),
+        unknown_names=names,
         context_names=STANCE_CONTEXT.names,
-        rhs=ca.Function("stance_rhs", args, [stance_rhs(*args)]),
+        rhs=ca.Function("stance_rhs", args, [stance_rhs(x, t, p, c)]),
         final=ca.Function("stance_final", [x, c], [stance_final_conditions(x, c, at_rest)]),
         outputs=ca.Function("stance_outputs", args, [ca.vertcat(forces, pa)]),
         output_names=STANCE_FORCES,
+        path=ca.Function("stance_path", args, [stance_path(x, c)]),
+        path_names=STANCE_PATH,
+        cost=ca.Function("stance_tracking_cost", args, [tracking_cost(x, t, p, c)]),
         events=events,
-        pairing=((0, 0), (1, 1), (2, 2)) if at_rest else ((0, 0), (1, 1)),
+        pairing=pairs,
     )
+
+
+def stance_path_bounds(hip_floor: bool, at_rest: bool = False):
+    """Per-node lower bounds of :func:`~.stance_law.stance_path`, from a trajectory (N+1, 6).
+
+    Where each inequality applies depends on the motion, so the solver re-evaluates the bounds on
+    its solution and re-solves until they agree:
+
+    - the lock rule on the nodes where theta1 < 0, once the leg has first come down to l1 after
+      heel strike (the foot raises the hip at impact, so w > l1 there is the eq. 3 geometry, not an
+      early plantar flexion); never in the closing stance, whose goal is w = l1 with theta1 < 0;
+    - with ``hip_floor``, the floor on every node after the hip stops falling (a hip that arrives
+      descending, from a step solved without the floor, cannot stop at once: velocities are
+      continuous through the heel-strike map), and a non-negative vertical velocity at t_step.
+    """
+    def bounds(t: np.ndarray, states: np.ndarray, context: np.ndarray) -> np.ndarray:
+        n = len(t)
+        lower = np.full((n, len(STANCE_PATH)), -np.inf)
+        w, theta1 = states[:, 0], states[:, 1]
+        l1 = context[STANCE_CONTEXT.index["l1"]]
+        if not at_rest:
+            settled = np.cumsum(w <= l1) > 0
+            lower[1:, 0] = np.where(settled[1:] & (theta1[1:] < 0), 0.0, -np.inf)
+        if hip_floor:
+            yd = states[:, 3] * np.cos(theta1) - w * states[:, 4] * np.sin(theta1)
+            rising = np.cumsum(yd >= 0) > 0
+            lower[1:, 1] = np.where(rising[1:], 0.0, -np.inf)
+            lower[-1, 2] = 0.0
+        return lower
+    return bounds

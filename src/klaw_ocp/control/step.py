@@ -20,8 +20,8 @@ from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
                              swing1_end_posture)
 from .gains import ControlGains
-from .stance_law import STANCE_CONTEXT
-from .stance_spec import stance_spec
+from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
+from .stance_spec import stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -73,16 +73,21 @@ def lock_rule_notes(stance: SubphaseSolution, l1: float) -> list:
 class StepController:
     """Builds and solves the subphase problems of successive steps with one solver."""
 
-    def __init__(self, body: Body, attrs, gains: ControlGains, solver, lock_rule: str = "momentum"):
+    def __init__(self, body: Body, attrs, gains: ControlGains, solver, lock_rule: str = "momentum",
+                 stance_formulation: str = "monitored"):
         self.body, self.attrs, self.gains, self.solver = body, attrs, gains, solver
         self.lock_rule = lock_rule
+        #: "monitored" (the paper's square stance) or "tracking" (pa free over the grid, IPOPT)
+        self.tracking = stance_formulation == "tracking"
         self.n = solver.intervals
         self.stance_spec = stance_spec(lock_rule)
         self.swing_specs = swing_specs(lock_rule)
         self.guesses: dict = {}
+        self.previous_states: dict = {}
         weight = body.mass * body.g
-        self.scales = {"stance": np.array([0.05 * weight * body.l1, 0.02]),
-                       "swing1": np.array([0.2 * body.m1 * body.g * body.l1]),
+        stance_scale = {"F_theta1_magnitude": 0.05 * weight * body.l1, "F_theta1_brake": 0.05 * weight * body.l1}
+        self.stance_scale = {n: stance_scale.get(n, 0.02) for n in STANCE_PARAMETERS.names}
+        self.scales = {"swing1": np.array([0.2 * body.m1 * body.g * body.l1]),
                        "swing2": np.array([0.1 * body.m4 * body.g * body.l4, 0.05]),
                        "swing3": np.array([0.05 * body.m1 * body.g * body.l1])}
 
@@ -97,12 +102,15 @@ class StepController:
         return ctx
 
     def _solve(self, step: int, problem: SubphaseProblem, remember: bool = True) -> SubphaseSolution:
-        """Solve; raise ConvergenceError on failure; keep the parameters to start the next step."""
+        """Solve; raise ConvergenceError on failure; keep the parameters and, for an optimised
+        problem, the node states to start the next step from."""
         solution = self.solver.solve(problem)
         if not solution.success:
             raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message)
         if remember:
             self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
+            if problem.optimize:
+                self.previous_states[problem.spec.name] = solution.states
         return solution
 
     def _guess(self, name: str, nu: int) -> np.ndarray:
@@ -113,11 +121,18 @@ class StepController:
         t = plan.timings
         grid = time_grid(0.0, t.t_step, self.n, self._breakpoints(plan))
         ctx = STANCE_CONTEXT.pack(self.stance_context(plan, inp))
-        spec, guess, scale = self.stance_spec, self._guess("stance", 2), self.scales["stance"]
-        if at_rest:
-            spec, guess, scale = stance_spec(self.lock_rule, True), np.append(guess, 0.0), np.append(scale, scale[0])
-        # the closing stance has a third unknown: it must not seed the next walk's stances
-        return self._solve(index, SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale), remember=not at_rest)
+        names = stance_unknowns(at_rest)
+        spec = stance_spec(self.lock_rule, at_rest)
+        previous = dict(zip(stance_unknowns(), self._guess("stance", len(stance_unknowns()))))
+        if not self.tracking:   # the paper's formulation: pa is the monitoring law plus the offset alone
+            previous.update({k: 0.0 for k in PA_KNOTS})
+        guess = np.array([previous.get(k, 0.0) for k in names])
+        scale = np.array([self.stance_scale[k] for k in names])
+        problem = SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale, fixed=stance_fixed(at_rest),
+                                  path_lower=stance_path_bounds(self.tracking, at_rest), optimize=self.tracking,
+                                  state_guess=None if at_rest else self.previous_states.get("stance"))
+        # the closing stance has one more unknown: it must not seed the next walk's stances
+        return self._solve(index, problem, remember=not at_rest)
 
     @staticmethod
     def _breakpoints(plan) -> list:
@@ -173,10 +188,8 @@ class StepController:
         coeffs = curve_p_coefficients(a0, a_max, a_min, a.swing_peak_position * d_travel, d_travel)
 
         ctx = dict(sctx)
-        ctx.update(stance_F_theta1=stance.parameters["F_theta1_magnitude"],
-                   stance_pa_offset=stance.parameters["pa_offset"],
-                   stance_F_theta1_brake=stance.parameters.get("F_theta1_brake", 0.0),
-                   origin_x=origin[0], origin_y=origin[1],
+        ctx.update({f"stance_{k}": stance.parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
+        ctx.update(origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
                    foot_from_time=t2, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
                    theta6_impact=theta6_hs, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,

@@ -28,12 +28,15 @@ from ..dynamics.kinematics import foot_points_sx
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from ..dynamics.swing import swing_accelerations_sx, swing_points
 from .layout import VectorLayout
-from .stance_law import STANCE_CONTEXT, body_vector, stance_forces
+from .stance_law import STANCE_CONTEXT, STANCE_PARAMETERS, body_vector, stance_forces
 from .torques import decaying_exponential, spring_damper
 
+#: the solved stance parameters, under these names in the swing context
+STANCE_PARAMETERS_IN_SWING = tuple(f"stance_{name}" for name in STANCE_PARAMETERS.names)
 SWING_CONTEXT = VectorLayout(
     STANCE_CONTEXT,
-    ["stance_F_theta1", "stance_pa_offset", "stance_F_theta1_brake", "origin_x", "origin_y", "l8", "l9", "l12", "l13",
+    STANCE_PARAMETERS_IN_SWING,
+    ["origin_x", "origin_y", "l8", "l9", "l12", "l13",
      "toe_off_time", "swing_end_time", "foot_from_time", "theta5_from", "theta5_impact", "theta6_from",
      "theta6_impact",
      "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
@@ -52,9 +55,9 @@ def names(c):
 def stance_part(xs, t, c):
     """Stance rates, its forces, and the hip's world position, velocity and acceleration."""
     n = names(c)
-    u_stance = ca.vertcat(n.stance_F_theta1, n.stance_pa_offset, n.stance_F_theta1_brake)
-    stance_c = c[: len(STANCE_CONTEXT)]
-    force, pa = stance_forces(xs, t, u_stance, stance_c)
+    first = SWING_CONTEXT.index[STANCE_PARAMETERS_IN_SWING[0]]
+    p_stance = c[first: first + len(STANCE_PARAMETERS)]
+    force, pa = stance_forces(xs, t, p_stance, c[: len(STANCE_CONTEXT)])
     qdd = stance_accelerations_sx(xs[0:3], xs[3:6], force, body_vector(c), n.locked)
     pos, vel, acc = hip_kinematics_sx(xs[0:3], xs[3:6], qdd)
     hip = pos + ca.vertcat(n.origin_x, n.origin_y)

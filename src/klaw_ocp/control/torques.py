@@ -11,6 +11,7 @@ plain-shooting solvers.
   in swing2 (§4.3).
 - :func:`decaying_exponential`: F_theta3 in swing1 and F_theta4 in swing2 (§4.3).
 - :func:`hip_height_reference` and :func:`position_actuator`: the "monitoring" of pa (§4.2).
+- :func:`piecewise_linear`: the pa profile that the tracking formulation frees over the grid.
 """
 from __future__ import annotations
 
@@ -42,6 +43,15 @@ def spring_damper(q, qd, stiffness, damping, q_rest, actuator=0.0):
 def leg_force(w, wd, stiffness, damping, l1, pa):
     """F_w = k_w (l1 + pa - w) - v_w wd: ERRATA 8's reading of the lost eq. 4 (pa shifts the rest length)."""
     return spring_damper(w, wd, stiffness, damping, l1, pa)
+
+
+def piecewise_linear(s, knots):
+    """The piecewise-linear function through ``knots`` at s = 0, 1/K, ..., 1 (K = len(knots) - 1),
+    held at its end values outside [0, 1]: a sum of hat functions, smooth enough for Newton and
+    IPOPT between the knots."""
+    k = len(knots) - 1
+    s = ca.fmin(ca.fmax(s, 0), 1) * k
+    return sum(knot * ca.fmax(0, 1 - ca.fabs(s - i)) for i, knot in enumerate(knots))
 
 
 def hip_height_reference(t, duration, y_start, y_end, excursion):

@@ -15,6 +15,11 @@ solver is built once per (spec, N, substeps, set of free unknowns) and reused wi
   objective keeps them as close as possible to their nominal values. This is the OCP form of the
   paper's recovery loop: instead of raising the actuator in increments until the toe clears, it
   finds the smallest change that makes it clear.
+- A spec with a running cost (the stance's hip-height tracking) is optimised instead: the
+  objective is the mean of the cost over the nodes, and every unknown is free (pa over the grid).
+- Bounds that depend on the motion (the stance lock rule applies while theta1 < 0) are evaluated
+  on the starting trajectory, then on each solution, and the NLP is re-solved from the last
+  solution until the set of active nodes no longer changes.
 """
 from __future__ import annotations
 
@@ -25,7 +30,7 @@ import casadi as ca
 import numpy as np
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, path_margin
+from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, path_bounds, path_margin
 
 
 def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
@@ -60,7 +65,8 @@ def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask:
     if spec.path is not None:
         path_map = spec.path.map(n + 1)
         path = ca.vec(path_map(all_states, tn.T, ca.repmat(u, 1, n + 1), ca.repmat(c, 1, n + 1)).T)
-    return dict(z=z, params=params, defects=defects, final=final, path=path, u=u, u_all=u_all)
+    return dict(z=z, params=params, defects=defects, final=final, path=path, u=u, u_all=u_all,
+                states=all_states, times=tn, context=c)
 
 
 @lru_cache(maxsize=None)
@@ -82,6 +88,11 @@ def _ipopt(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_it
     weights = ca.SX.sym("w", n_u)   # 1 for unknowns held fixed in the square problem
     deviation = (tr["u"] - u_nominal) / u_scale
     objective = ca.sumsqr(weights * deviation) + 1e-8 * ca.sumsqr(deviation)
+    if spec.cost is not None:
+        nodes = intervals + 1
+        running = spec.cost.map(nodes)(tr["states"], tr["times"].T, ca.repmat(tr["u"], 1, nodes),
+                                       ca.repmat(tr["context"], 1, nodes))
+        objective = objective + ca.sum2(running) / nodes
     g = ca.vertcat(tr["defects"], tr["final"], tr["path"] if tr["path"] is not None else ca.SX(0, 1))
     nlp = {"x": tr["z"], "p": ca.vertcat(tr["params"], u_nominal, u_scale, weights), "f": objective, "g": g}
     opts = {"ipopt.tol": tol, "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter * 10,
@@ -123,6 +134,8 @@ class MultipleShootingSolver:
         start on a trajectory that nearly satisfies them.
         """
         u = pb.guess.copy()
+        if self._warm(pb):
+            return u, np.asarray(pb.state_guess)[1:]
         final = lambda xs: np.asarray(pb.spec.final(xs[-1], pb.context)).ravel()
         xs = self._simulate(pb, u)
         res = final(xs)
@@ -149,9 +162,11 @@ class MultipleShootingSolver:
                 break
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
             u, xs = self._bracket_guess(pb, free[0], u, final)
-        if pb.state_guess is not None and pb.state_guess.shape == (self.intervals + 1, pb.spec.nx):
-            xs = np.asarray(pb.state_guess)[1:]
         return u, np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
+
+    def _warm(self, pb: SubphaseProblem) -> bool:
+        """Whether the problem carries node states to start from (the previous step's solution)."""
+        return pb.state_guess is not None and np.shape(pb.state_guess) == (self.intervals + 1, pb.spec.nx)
 
     def _bracket_guess(self, pb, i, u, final, tol: float = 1e-4):
         """One free unknown whose single-shooting residual Newton could not reduce (a trajectory
@@ -231,26 +246,35 @@ class MultipleShootingSolver:
         spec, n = pb.spec, self.intervals
         solver = _ipopt(spec, n, self.substeps, self.tolerance, self.max_iterations)
         if start is not None and np.all(np.isfinite(start.states)):
-            z0 = np.concatenate([start.states[1:].ravel(), [start.parameters[k] for k in spec.unknown_names]])
+            u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
             u0, xs0 = self._initial_guess(pb, [])
-            z0 = np.concatenate([xs0.ravel(), u0])
-        weights = np.array([1.0 if f else 0.0 for f in pb.fixed])
+        z0 = np.concatenate([xs0.ravel(), u0])
+        # an optimised formulation is judged by its cost alone; otherwise stay near the nominal unknowns
+        weights = np.array([1.0 if f and spec.cost is None else 0.0 for f in pb.fixed])
         params = np.concatenate([self._params(pb, pb.guess), pb.guess, pb.scale, weights])
         n_eq = n * spec.nx + spec.final.size1_out(0)
-        lbg = np.zeros(n_eq)
-        ubg = np.zeros(n_eq)
-        if spec.path is not None:
-            lower = pb.path_lower if pb.path_lower is not None else np.full((n + 1, len(spec.path_names)), -np.inf)
-            lbg = np.concatenate([lbg, lower.T.ravel()])
-            ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
-        sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
-        stats = solver.stats()
-        z = np.asarray(sol["x"]).ravel()
-        u = z[n * spec.nx:]
-        result = self._finish(pb, z, u, int(stats.get("iter_count", 0)), wall0,
-                              "" if stats.get("success") else str(stats.get("return_status")),
-                              bool(stats.get("success")))
+        iterations, active, result = 0, None, None
+        for _ in range(4):
+            lower = path_bounds(pb, pb.grid, np.vstack([pb.x0, z0[: n * spec.nx].reshape(n, spec.nx)]))
+            if lower is None:
+                lower = np.full((n + 1, len(spec.path_names)), -np.inf)
+            if active is not None and np.array_equal(active, np.isfinite(lower)):
+                break
+            active = np.isfinite(lower)
+            lbg, ubg = np.zeros(n_eq), np.zeros(n_eq)
+            if spec.path is not None:
+                lbg = np.concatenate([lbg, lower.T.ravel()])
+                ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
+            sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
+            stats = solver.stats()
+            iterations += int(stats.get("iter_count", 0))
+            z0 = np.asarray(sol["x"]).ravel()
+            result = self._finish(pb, z0, z0[n * spec.nx:], iterations, wall0,
+                                  "" if stats.get("success") else str(stats.get("return_status")),
+                                  bool(stats.get("success")))
+            if not result.success:
+                break
         if result.path_min < -1e-7:
             result.success = False
             result.message = f"path constraint violated by {-result.path_min:.3g}"
@@ -261,9 +285,14 @@ class MultipleShootingSolver:
         if pb.grid.size != self.intervals + 1:
             raise ValueError(f"{pb.spec.name}: grid has {pb.grid.size - 1} intervals, solver {self.intervals}")
         has_path = pb.spec.path is not None and pb.path_lower is not None
-        if self.nlp == "ipopt" and has_path:
+        if pb.optimize and self._warm(pb):
+            return self._solve_ipopt(pb, wall0, None)
+        if self.nlp == "ipopt" and has_path and not pb.optimize:
             return self._solve_ipopt(pb, wall0, None)
         result = self._solve_square(pb, wall0)
+        if pb.optimize:
+            # a cold optimisation starts from the square solution: a feasible, nearby trajectory
+            return self._solve_ipopt(pb, wall0, result if result.success else None)
         if has_path and result.path_min < 0:
             if self.nlp == "rootfinder":
                 result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"

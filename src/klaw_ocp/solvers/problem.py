@@ -1,10 +1,12 @@
 """What a subphase boundary-value problem is, independent of how it is solved (section 4.1).
 
-    A(q) qdd = B(q, qd, F(t, x; u)),   x(t0) = x0,   g(x(t_end)) = 0,   h(x(t), t) >= 0
+    A(q) qdd = B(q, qd, F(t, x; u)),   x(t0) = x0,   g(x(t_end)) = 0,   h(x(t), t) >= lower(t)
+
+    and, when the problem is posed as an optimal control problem, min  sum_k L(x_k, t_k, u) / (N+1)
 
 A :class:`SubphaseSpec` is the symbolic structure, built once per process by ``klaw_ocp.control``:
 the closed-loop right-hand side ``rhs(x, t, u, c)``, the final conditions ``final(x_end, c)``, optional
-path functions ``path(x, t, u, c) >= 0`` and the forces to report. ``u`` are the few free
+path functions ``path(x, t, u, c) >= lower``, an optional running cost and the forces to report. ``u`` are the few free
 parameters of the paper's torque shapes; ``c`` is a numeric context (body, gains, targets) that
 each step fills in, so one compiled Function serves every step.
 
@@ -52,6 +54,7 @@ class SubphaseSpec:
     output_names: tuple
     path: Optional[ca.Function] = None   # (x, t, u, c) -> h[nh] >= 0
     path_names: tuple = ()
+    cost: Optional[ca.Function] = None   # (x, t, u, c) -> running cost L (optimised formulations)
     events: tuple = ()
     #: pairs (unknown index, final-condition index) for the paper's one-unknown-at-a-time shooting
     pairing: tuple = ()
@@ -77,7 +80,10 @@ class SubphaseProblem:
     ``guess`` the initial free parameters; ``scale`` their typical size (for brackets and
     tolerances). ``fixed`` marks unknowns held at their guess unless the solver needs them to
     satisfy path constraints (the swing2 recovery actuator). ``path_lower`` are lower bounds of
-    the path functions (e.g. the toe clearance); ``None`` means no inequality is enforced.
+    the path functions (e.g. the toe clearance); ``None`` means no inequality is enforced. It may
+    also be a callable ``(t, states, context) -> (N+1, nh)``, for inequalities whose nodes depend
+    on the motion (the stance lock rule). ``optimize``: solve as the optimal control problem with
+    the spec's cost and every unknown free, even when the square solution is feasible.
     """
     spec: SubphaseSpec
     x0: np.ndarray
@@ -86,9 +92,10 @@ class SubphaseProblem:
     guess: np.ndarray
     scale: np.ndarray
     fixed: Sequence[bool] = ()
-    path_lower: Optional[np.ndarray] = None      # (nh,) or (N+1, nh); -inf disables a node
+    path_lower: object = None                    # (nh,), (N+1, nh) or callable; -inf disables a node
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
+    optimize: bool = False
 
     def __post_init__(self):
         self.x0 = np.asarray(self.x0, float).ravel()
@@ -98,7 +105,7 @@ class SubphaseProblem:
         self.scale = np.asarray(self.scale, float).ravel()
         if not self.fixed:
             self.fixed = tuple(False for _ in range(self.spec.nu))
-        if self.path_lower is not None:
+        if self.path_lower is not None and not callable(self.path_lower):
             lower = np.asarray(self.path_lower, float)
             self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
         if np.any(np.diff(self.grid) <= 0):
@@ -159,16 +166,26 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
     return np.array(nodes)
 
 
-def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
-    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality).
+def path_bounds(pb: SubphaseProblem, times: np.ndarray, states: np.ndarray) -> Optional[np.ndarray]:
+    """Lower bounds of the path functions at the samples ``times`` (None: no inequality).
 
-    Samples off the grid (event nodes of plain shooting) use the bound of the node before them.
+    A callable ``path_lower`` is evaluated on the trajectory itself; fixed bounds of samples off
+    the grid (event nodes of plain shooting) are those of the node before them.
     """
-    spec = pb.spec
-    if spec.path is None or pb.path_lower is None:
-        return float("inf")
-    times = pb.grid if times is None else np.asarray(times)
+    if pb.spec.path is None or pb.path_lower is None:
+        return None
+    if callable(pb.path_lower):
+        return np.asarray(pb.path_lower(np.asarray(times), np.asarray(states), pb.context), float)
     node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
-    margins = [np.asarray(spec.path(states[k], times[k], u, pb.context)).ravel() - pb.path_lower[node[k]]
+    return pb.path_lower[node]
+
+
+def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
+    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality)."""
+    times = pb.grid if times is None else np.asarray(times)
+    lower = path_bounds(pb, times, states)
+    if lower is None:
+        return float("inf")
+    margins = [np.asarray(pb.spec.path(states[k], times[k], u, pb.context)).ravel() - lower[k]
                for k in range(len(times))]
     return float(np.min(margins))
