@@ -85,7 +85,7 @@ def test_accelerate_goes_2_5_2():
 def test_defaults_and_output_dir():
     c = ExperimentConfig.from_mapping(_base(output={"dir": "/tmp/elsewhere"}))
     assert c.solver.model_dump() == {"method": "multiple-shooting", "intervals": 20, "tolerance": 1e-9,
-                                     "max_iterations": 50, "nlp": "auto"}
+                                     "max_iterations": 50, "nlp": "auto", "stance": "monitored"}
     assert c.output_dir() == Path("/tmp/elsewhere")
     assert c.walk.start_from_rest is False and c.walk.end_at_rest is False
 

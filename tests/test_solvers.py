@@ -7,7 +7,7 @@ import pytest
 from klaw_ocp import Body
 from klaw_ocp.control.gains import control_gains
 from klaw_ocp.control.stance_law import STANCE_CONTEXT
-from klaw_ocp.control.stance_spec import stance_spec
+from klaw_ocp.control.stance_spec import stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
 from klaw_ocp.errors import ConfigError
 from klaw_ocp.gait import LocomotionAttributes, step_constraints, state_phase_timings
 from klaw_ocp.solvers import PlainShootingSolver, SubphaseProblem, make_solver, time_grid
@@ -25,7 +25,7 @@ def test_unknown_method_lists_the_choices():
         make_solver("newton")
 
 
-def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None):
+def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None, **options):
     body, attrs = Body(1.8, 80), LocomotionAttributes.defaults()
     con = step_constraints(body, 0.7746, attrs)
     tim = state_phase_timings(107.58, attrs)
@@ -38,8 +38,15 @@ def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None):
     v = speed_factor * con.step_length / tim.t_step
     if x0 is None:
         x0 = [con.w, -con.theta1, 0.0, -v * math.sin(con.theta1), v * math.cos(con.theta1) / con.w, 0.0]
+    nu = len(stance_unknowns())
     return SubphaseProblem(stance_spec(), np.array(x0), time_grid(0, tim.t_step, 20, [tim.t_theta1_off]),
-                           STANCE_CONTEXT.pack(ctx), np.zeros(2), np.array([40.0, 0.02]))
+                           STANCE_CONTEXT.pack(ctx), np.zeros(nu), np.r_[40.0, np.full(nu - 1, 0.02)],
+                           fixed=stance_fixed(), **options)
+
+
+def stance_u(magnitude, offset=0.0):
+    """A stance parameter vector with the pa profile at zero (the paper's formulation)."""
+    return np.r_[magnitude, offset, np.zeros(len(stance_unknowns()) - 2)]
 
 
 def test_both_modes_solve_the_same_square_problem_alike():
@@ -68,7 +75,7 @@ def test_plain_shooting_locks_and_unlocks_the_leg():
     # the hip-height monitor asks for a hip above l1 while the hip is still behind the ankle
     pb = stance_problem(x0=[body.l1 - 0.005, -0.3, 0.0, 0.4, 1.6, 0.0], y_ref=body.l1 + 0.03)
     solver = PlainShootingSolver(intervals=20)
-    times, states, context, log = solver.simulate(pb, np.array([60.0, 0.0]))
+    times, states, context, log = solver.simulate(pb, stance_u(60.0))
     names = [name for name, _ in log]
     assert names[:2] == ["leg_too_long", "leg_vertical"], log
     t_lock, t_unlock = log[0][1], log[1][1]

@@ -90,7 +90,7 @@ def walk_summary(walk) -> dict:
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
             "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
             "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
-            "path_min": _finite(s.path_min),
+            "path_min": _finite(s.path_min), "nlp": s.nlp,
         } for s in step.subphases]
         steps.append(entry)
     hip = walk_table(walk) if walk.steps else None
@@ -98,7 +98,7 @@ def walk_summary(walk) -> dict:
     return {
         "name": spec.name, "status": walk.status, "message": walk.message, "method": spec.method,
         "solver": {"intervals": spec.intervals, "tolerance": spec.tolerance, "nlp": spec.nlp,
-                   "lock_rule": spec.lock_rule},
+                   "lock_rule": spec.lock_rule, "stance": spec.stance},
         "body": spec.body.as_dict(), "attributes": spec.attributes.as_dict(),
         "wall_s": walk.wall_s, "simulated_s": walk.duration,
         "real_time_factor": walk.duration / walk.wall_s if walk.wall_s > 0 else None,

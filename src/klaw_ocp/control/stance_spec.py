@@ -30,7 +30,7 @@ from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
 from .stance_law import (PA_KNOTS, STANCE_CONTEXT, STANCE_FORCES, STANCE_PARAMETERS, STANCE_PATH, STANCE_STATE,
-                         stance_final_conditions, stance_forces, stance_path, stance_rhs, tracking_cost)
+                         stance_final_conditions, stance_forces, stance_path, stance_rhs, tracking_residuals)
 
 _LOCKED = STANCE_CONTEXT.index["locked"]
 _L1 = STANCE_CONTEXT.index["l1"]
@@ -112,7 +112,7 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
         output_names=STANCE_FORCES,
         path=ca.Function("stance_path", args, [stance_path(x, c)]),
         path_names=STANCE_PATH,
-        cost=ca.Function("stance_tracking_cost", args, [tracking_cost(x, t, p, c)]),
+        residuals=ca.Function("stance_tracking_residuals", args, [tracking_residuals(x, t, p, c)]),
         events=events,
         pairing=pairs,
     )

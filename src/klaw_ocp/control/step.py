@@ -55,18 +55,24 @@ class StepResult:
         return next(s for s in self.subphases if s.name == name)
 
 
-def lock_rule_notes(stance: SubphaseSolution, l1: float) -> list:
-    """Where a stance solution without lock events lets the leg grow through l1 while theta1 < 0.
+def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> list:
+    """How the stance met the lock rule (w <= l1 while theta1 < 0, once the leg has come down to l1).
 
-    Plain shooting locks the leg there (an event); the multiple-shooting stance does not enforce
-    the rule yet, so a walk reports it instead of hiding it.
+    Plain shooting locks the leg (events); multiple shooting holds the rule as a path constraint,
+    re-solving with IPOPT when the square solution breaks it. A breach left in a solution (the
+    closing stance, or ``nlp: rootfinder``) is reported, not hidden.
     """
     if stance.events:
         return [f"stance lock events: {', '.join(f'{n} at t={t:.3f} s' for n, t in stance.events)}"]
     w, theta1 = stance.states[:, 0], stance.states[:, 1]
-    for k in range(len(w) - 1):
-        if w[k] < l1 <= w[k + 1] and theta1[k] < 0:
-            return [f"lock rule not enforced: w passes l1 at t={stance.t[k + 1]:.3f} s while theta1 < 0"]
+    settled = np.cumsum(w <= l1) > 0
+    on_limit = settled & (theta1 < 0) & (w > l1 - tol)
+    breach = np.flatnonzero(on_limit & (w > l1 + tol))
+    if breach.size:
+        return [f"lock rule not enforced: w exceeds l1 by {w[breach].max() - l1:.3g} m at "
+                f"t={stance.t[breach[0]]:.3f} s while theta1 < 0"]
+    if on_limit[1:].any() and stance.nlp == "ipopt":
+        return [f"lock rule held by the path constraint w <= l1 (IPOPT), first at t={stance.t[np.argmax(on_limit)]:.3f} s"]
     return []
 
 

@@ -357,7 +357,7 @@ class PlainShootingSolver:
             msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
         return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
                                 times, states, forces, res, shots, bool(ok), time.perf_counter() - wall0,
-                                msg if not ok or recovery else "", path_min, log)
+                                msg if not ok or recovery else "", path_min, log, "bisection-secant")
 
 
 

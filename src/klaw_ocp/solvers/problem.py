@@ -2,11 +2,11 @@
 
     A(q) qdd = B(q, qd, F(t, x; u)),   x(t0) = x0,   g(x(t_end)) = 0,   h(x(t), t) >= lower(t)
 
-    and, when the problem is posed as an optimal control problem, min  sum_k L(x_k, t_k, u) / (N+1)
+    and, when the problem is posed as an optimal control problem, min  sum_k |r(x_k, t_k, u)|^2 / (N+1)
 
 A :class:`SubphaseSpec` is the symbolic structure, built once per process by ``klaw_ocp.control``:
 the closed-loop right-hand side ``rhs(x, t, u, c)``, the final conditions ``final(x_end, c)``, optional
-path functions ``path(x, t, u, c) >= lower``, an optional running cost and the forces to report. ``u`` are the few free
+path functions ``path(x, t, u, c) >= lower``, an optional least-squares running cost and the forces to report. ``u`` are the few free
 parameters of the paper's torque shapes; ``c`` is a numeric context (body, gains, targets) that
 each step fills in, so one compiled Function serves every step.
 
@@ -54,7 +54,7 @@ class SubphaseSpec:
     output_names: tuple
     path: Optional[ca.Function] = None   # (x, t, u, c) -> h[nh] >= 0
     path_names: tuple = ()
-    cost: Optional[ca.Function] = None   # (x, t, u, c) -> running cost L (optimised formulations)
+    residuals: Optional[ca.Function] = None   # (x, t, u, c) -> r; running cost |r|^2 (optimised formulations)
     events: tuple = ()
     #: pairs (unknown index, final-condition index) for the paper's one-unknown-at-a-time shooting
     pairing: tuple = ()
@@ -133,6 +133,8 @@ class SubphaseSolution:
     message: str = ""
     path_min: float = float("inf")
     events: list = field(default_factory=list)
+    #: which algorithm produced it: "rootfinder", "ipopt" or "bisection-secant"
+    nlp: str = ""
 
     @property
     def status(self) -> str:
