@@ -60,3 +60,12 @@ def test_run_bad_config_exits_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "walk.speed" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_run_tracking_stance_with_plain_shooting_exits_2(short_config, tmp_path, capsys):
+    code = main(["run", str(short_config), "--method", "plain-shooting", "--stance", "tracking",
+                 "--out", str(tmp_path / "o"), "--quiet"])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "solver.stance" in err[0] and "'tracking'" in err[0] and "multiple-shooting" in err[0]
+    assert not (tmp_path / "o").exists()

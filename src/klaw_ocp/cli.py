@@ -16,7 +16,7 @@ import json
 import math
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 from .body import Body
@@ -175,6 +175,9 @@ def _configure_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/<name>/)")
     p.add_argument("--method", choices=("multiple-shooting", "plain-shooting"),
                    help="solver mode (default: the config's solver.method)")
+    p.add_argument("--stance", choices=("monitored", "tracking"),
+                   help="stance formulation: the paper's monitored pa, or pa optimised over the grid "
+                        "to track the hip sinusoid (multiple shooting only; default: solver.stance)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -187,6 +190,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     out = args.out or config.output_dir()
     spec = walk_spec(config, args.method)
+    if args.stance:
+        spec = replace(spec, stance=args.stance)
     try:
         walk = simulate_walk(spec, progress=not args.quiet)
     except ConvergenceError as exc:
@@ -197,7 +202,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     paths = write_walk(walk, out)
     rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
     print(f"{spec.name}: {len(walk.steps)} steps, {walk.duration:.2f} s of walking in {walk.wall_s:.2f} s "
-          f"({rtf:.1f}x real time, {spec.method}); wrote {paths['summary']} and {paths['dynamics']}")
+          f"({rtf:.1f}x real time, {spec.method}, {spec.stance} stance); wrote {paths['summary']} and {paths['dynamics']}")
     return 0
 
 

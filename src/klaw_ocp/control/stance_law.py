@@ -105,13 +105,14 @@ def tracking_residuals(x, t, p, c):
     """Least-squares residuals of the tracking formulation (its running cost is their sum of
     squares): the hip's distance from the sinusoid of human walking, in units of
     :data:`TRACKING_SCALE_M`, and a small price on kinks of the pa profile so that the optimum is a
-    smooth actuator, not a saw-tooth the grid cannot see."""
+    smooth actuator, not a saw-tooth the grid cannot see. The profile replaces the offset of the
+    monitored formulation (the two overlap after mid-step), so the offset is priced too."""
     n, q = STANCE_CONTEXT.bind(c), STANCE_PARAMETERS.bind(p)
     y, _ = hip_height(x)
     y_ref, _ = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion)
     knots = ca.vertcat(*[getattr(q, k) for k in PA_KNOTS])
     kinks = ca.diff(ca.diff(knots))
-    return ca.vertcat((y - y_ref) / TRACKING_SCALE_M, 0.1 * kinks / TRACKING_SCALE_M)
+    return ca.vertcat((y - y_ref) / TRACKING_SCALE_M, 0.1 * kinks / TRACKING_SCALE_M, 0.1 * q.pa_offset / TRACKING_SCALE_M)
 
 
 def stance_final_conditions(x, c, at_rest: bool = False):
