@@ -14,7 +14,7 @@ from klaw_ocp.control.stance_spec import stance_path_bounds
 from klaw_ocp.control.step import lock_rule_notes
 from klaw_ocp.control.torques import hip_height_reference, piecewise_linear
 from klaw_ocp.errors import ConfigError
-from klaw_ocp.results import walk_table
+from klaw_ocp.results import walk_summary, walk_table
 from klaw_ocp.solvers import make_solver
 from klaw_ocp.walk import simulate_walk
 
@@ -105,6 +105,9 @@ def test_tracking_walk_chains_steps_and_swings_follow_the_optimised_stance():
     table = walk_table(walk)
     speed = 3.6 * (table["hip_x"][-1] - table["hip_x"][0]) / (table["t"][-1] - table["t"][0])
     assert speed == pytest.approx(5.0, rel=0.05)
+    summary = walk_summary(walk)
+    assert summary["solver"]["stance"] == "tracking"
+    assert all(entry["hip_dip_m"] < 1e-8 for entry in summary["steps"])
     for step in walk.steps:
         stance = step.subphase("stance")
         assert stance.nlp == "ipopt"

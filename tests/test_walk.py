@@ -56,6 +56,16 @@ def test_mean_speed_and_hip_sinusoid(natural_walk):
         assert ys[interior].max() == pytest.approx(ys.max())
 
 
+def test_summary_reports_how_far_the_monitored_hip_dips(natural_walk):
+    """The paper's monitored pa lets the hip dip below its heel-strike height just after impact
+    (it arrives descending); the summary says by how much, per step."""
+    summary = walk_summary(natural_walk)
+    assert summary["solver"]["stance"] == "monitored"
+    dips = [entry["hip_dip_m"] for entry in summary["steps"]]
+    assert all(0.0 <= d < 0.005 for d in dips) and max(dips) > 1e-3
+    assert all(s["nlp"] in ("rootfinder", "bisection-secant") for e in summary["steps"] for s in e["subphases"])
+
+
 def test_toe_clears_the_ground_in_swing2(natural_walk):
     clearance = natural_walk.spec.attributes.toe_clearance
     for step in natural_walk.steps:

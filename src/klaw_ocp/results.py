@@ -79,12 +79,21 @@ def _finite(value):
     return value if math.isfinite(value) else None
 
 
+def hip_dip(stance) -> float:
+    """How far the hip goes below the lower of its step's two heel-strike heights (0 if never):
+    §4's "never … below its minimal value at heel strike", a hard constraint only in the
+    tracking stance."""
+    y = stance.states[:, 0] * np.cos(stance.states[:, 1])
+    return float(max(0.0, min(y[0], y[-1]) - y.min()))
+
+
 def walk_summary(walk) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results."""
     steps = []
     for step in walk.steps:
         entry = step.plan.as_dict()
-        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min, notes=list(step.notes),
+        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min,
+                     hip_dip_m=hip_dip(step.subphase("stance")), notes=list(step.notes),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
         entry["subphases"] = [{
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
