@@ -73,6 +73,12 @@ def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask:
 
 
 @lru_cache(maxsize=None)
+def _mapped(fn: ca.Function, n: int) -> ca.Function:
+    """``fn`` over n columns at once (u and c are broadcast): one call instead of a Python loop."""
+    return fn.map(n)
+
+
+@lru_cache(maxsize=None)
 def _rootfinder(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tuple, tol: float, max_iter: int):
     tr = _transcription(spec, intervals, substeps, free_mask)
     residual = ca.Function(f"{spec.name}_ms_residual", [tr["z"], tr["params"]],
@@ -214,12 +220,10 @@ class MultipleShootingSolver:
         states = np.vstack([pb.x0, np.asarray(z[: n * spec.nx]).reshape(n, spec.nx)])
         # The reported residual is that of the discrete trajectory the solver returns.
         residual = float(np.max(np.abs(np.asarray(spec.final(states[-1], pb.context)))))
-        step = interval_function(spec, self.substeps)
-        defect = max(float(np.max(np.abs(np.asarray(step(states[k], pb.grid[k], pb.grid[k + 1] - pb.grid[k], u,
-                                                              pb.context)).ravel() - states[k + 1])))
-                     for k in range(n))
-        forces = np.array([np.asarray(spec.outputs(states[k], pb.grid[k], u, pb.context)).ravel()
-                           for k in range(n + 1)])
+        propagated = _mapped(interval_function(spec, self.substeps), n)(
+            states[:-1].T, pb.grid[:-1], np.diff(pb.grid), u, pb.context)
+        defect = float(np.max(np.abs(np.asarray(propagated).T - states[1:])))
+        forces = np.asarray(_mapped(spec.outputs, n + 1)(states.T, pb.grid, u, pb.context)).T
         path_min = path_margin(pb, states, u)
         ok = success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9) and np.all(np.isfinite(states))
         msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
