@@ -7,7 +7,7 @@ import pytest
 from klaw_ocp import Body
 from klaw_ocp.control.gains import control_gains
 from klaw_ocp.control.stance_law import STANCE_CONTEXT
-from klaw_ocp.control.stance_spec import stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
+from klaw_ocp.control.stance_spec import stance_fixed, stance_spec, stance_unknowns
 from klaw_ocp.errors import ConfigError
 from klaw_ocp.gait import LocomotionAttributes, step_constraints, state_phase_timings
 from klaw_ocp.solvers import PlainShootingSolver, SubphaseProblem, make_solver, time_grid
