@@ -79,11 +79,11 @@ def _finite(value):
     return value if math.isfinite(value) else None
 
 
-def hip_dip(stance) -> float:
+def hip_dip(body, stance) -> float:
     """How far the hip goes below the lower of its step's two heel-strike heights (0 if never):
     §4's "never … below its minimal value at heel strike", a hard constraint only in the
     tracking stance."""
-    y = stance.states[:, 0] * np.cos(stance.states[:, 1])
+    y = np.array([stance_hip(body, x, np.zeros(2))[0][1] for x in stance.states])
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 
@@ -93,7 +93,7 @@ def walk_summary(walk) -> dict:
     for step in walk.steps:
         entry = step.plan.as_dict()
         entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min,
-                     hip_dip_m=hip_dip(step.subphase("stance")), notes=list(step.notes),
+                     hip_dip_m=hip_dip(walk.spec.body, step.subphase("stance")), notes=list(step.notes),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
         entry["subphases"] = [{
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),

@@ -30,7 +30,8 @@ from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
 from .stance_law import (PA_KNOTS, STANCE_CONTEXT, STANCE_FORCES, STANCE_PARAMETERS, STANCE_PATH, STANCE_STATE,
-                         stance_final_conditions, stance_forces, stance_path, stance_rhs, tracking_residuals)
+                         hip_height_function, stance_final_conditions, stance_forces, stance_path, stance_rhs,
+                         tracking_residuals)
 
 _LOCKED = STANCE_CONTEXT.index["locked"]
 _L1 = STANCE_CONTEXT.index["l1"]
@@ -118,15 +119,22 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
     )
 
 
+def lock_rule_nodes(states: np.ndarray, l1: float) -> np.ndarray:
+    """Where the lock rule applies: theta1 < 0, once the leg has first come down to l1 after heel
+    strike (the foot raises the hip at impact, so w > l1 there is the eq. 3 geometry, not an
+    early plantar flexion)."""
+    w, theta1 = states[:, 0], states[:, 1]
+    return (np.cumsum(w <= l1) > 0) & (theta1 < 0)
+
+
 def stance_path_bounds(hip_floor: bool, at_rest: bool = False):
     """Per-node lower bounds of :func:`~.stance_law.stance_path`, from a trajectory (N+1, 6).
 
     Where each inequality applies depends on the motion, so the solver re-evaluates the bounds on
     its solution and re-solves until they agree:
 
-    - the lock rule on the nodes where theta1 < 0, once the leg has first come down to l1 after
-      heel strike (the foot raises the hip at impact, so w > l1 there is the eq. 3 geometry, not an
-      early plantar flexion); never in the closing stance, whose goal is w = l1 with theta1 < 0;
+    - the lock rule on :func:`lock_rule_nodes`; never in the closing stance, whose goal is
+      w = l1 with theta1 < 0;
     - with ``hip_floor``, the floor on every node after the hip stops falling (a hip that arrives
       descending, from a step solved without the floor, cannot stop at once: velocities are
       continuous through the heel-strike map), and a non-negative vertical velocity at t_step.
@@ -134,13 +142,11 @@ def stance_path_bounds(hip_floor: bool, at_rest: bool = False):
     def bounds(t: np.ndarray, states: np.ndarray, context: np.ndarray) -> np.ndarray:
         n = len(t)
         lower = np.full((n, len(STANCE_PATH)), -np.inf)
-        w, theta1 = states[:, 0], states[:, 1]
-        l1 = context[STANCE_CONTEXT.index["l1"]]
         if not at_rest:
-            settled = np.cumsum(w <= l1) > 0
-            lower[1:, 0] = np.where(settled[1:] & (theta1[1:] < 0), 0.0, -np.inf)
+            rule = lock_rule_nodes(states, context[STANCE_CONTEXT.index["l1"]])
+            lower[1:, 0] = np.where(rule[1:], 0.0, -np.inf)
         if hip_floor:
-            yd = states[:, 3] * np.cos(theta1) - w * states[:, 4] * np.sin(theta1)
+            yd = np.asarray(hip_height_function(n)(states.T)[1]).ravel()
             rising = np.cumsum(yd >= 0) > 0
             lower[1:, 1] = np.where(rising[1:], 0.0, -np.inf)
             lower[-1, 2] = 0.0

@@ -21,7 +21,7 @@ from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metata
                              swing1_end_posture)
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
-from .stance_spec import stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
+from .stance_spec import lock_rule_nodes, stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -64,9 +64,8 @@ def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> l
     """
     if stance.events:
         return [f"stance lock events: {', '.join(f'{n} at t={t:.3f} s' for n, t in stance.events)}"]
-    w, theta1 = stance.states[:, 0], stance.states[:, 1]
-    settled = np.cumsum(w <= l1) > 0
-    on_limit = settled & (theta1 < 0) & (w > l1 - tol)
+    w = stance.states[:, 0]
+    on_limit = lock_rule_nodes(stance.states, l1) & (w > l1 - tol)
     breach = np.flatnonzero(on_limit & (w > l1 + tol))
     if breach.size:
         return [f"lock rule not enforced: w exceeds l1 by {w[breach].max() - l1:.3g} m at "
