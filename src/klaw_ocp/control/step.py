@@ -85,7 +85,6 @@ class StepController:
         #: "monitored" (the paper's square stance) or "tracking" (pa free over the grid, IPOPT)
         self.tracking = stance_formulation == "tracking"
         self.n = solver.intervals
-        self.stance_spec = stance_spec(lock_rule)
         self.swing_specs = swing_specs(lock_rule)
         self.guesses: dict = {}
         self.previous_states: dict = {}

@@ -33,7 +33,7 @@ import casadi as ca
 import numpy as np
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, path_bounds, path_margin
+from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, mapped, path_bounds, path_margin
 
 
 def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
@@ -70,12 +70,6 @@ def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask:
         path = ca.vec(path_map(all_states, tn.T, ca.repmat(u, 1, n + 1), ca.repmat(c, 1, n + 1)).T)
     return dict(z=z, params=params, defects=defects, final=final, path=path, u=u, u_all=u_all,
                 states=all_states, times=tn, context=c)
-
-
-@lru_cache(maxsize=None)
-def _mapped(fn: ca.Function, n: int) -> ca.Function:
-    """``fn`` over n columns at once (u and c are broadcast): one call instead of a Python loop."""
-    return fn.map(n)
 
 
 @lru_cache(maxsize=None)
@@ -220,10 +214,10 @@ class MultipleShootingSolver:
         states = np.vstack([pb.x0, np.asarray(z[: n * spec.nx]).reshape(n, spec.nx)])
         # The reported residual is that of the discrete trajectory the solver returns.
         residual = float(np.max(np.abs(np.asarray(spec.final(states[-1], pb.context)))))
-        propagated = _mapped(interval_function(spec, self.substeps), n)(
+        propagated = mapped(interval_function(spec, self.substeps), n)(
             states[:-1].T, pb.grid[:-1], np.diff(pb.grid), u, pb.context)
         defect = float(np.max(np.abs(np.asarray(propagated).T - states[1:])))
-        forces = np.asarray(_mapped(spec.outputs, n + 1)(states.T, pb.grid, u, pb.context)).T
+        forces = np.asarray(mapped(spec.outputs, n + 1)(states.T, pb.grid, u, pb.context)).T
         path_min = path_margin(pb, states, u)
         ok = success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9) and np.all(np.isfinite(states))
         msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
@@ -301,17 +295,14 @@ class MultipleShootingSolver:
         if pb.grid.size != self.intervals + 1:
             raise ValueError(f"{pb.spec.name}: grid has {pb.grid.size - 1} intervals, solver {self.intervals}")
         has_path = pb.spec.path is not None and pb.path_lower is not None
-        if pb.optimize and self._warm(pb):
-            return self._solve_ipopt(pb, wall0, None)
-        if self.nlp == "ipopt" and has_path and not pb.optimize:
+        # straight to IPOPT: an optimisation with a warm start, or nlp="ipopt" on an inequality problem
+        if (self._warm(pb) if pb.optimize else self.nlp == "ipopt" and has_path):
             return self._solve_ipopt(pb, wall0, None)
         result = self._solve_square(pb, wall0)
-        if pb.optimize:
-            # a cold optimisation starts from the square solution: a feasible, nearby trajectory
+        violated = has_path and result.path_min < 0
+        # a cold optimisation, or a repair, starts from the square solution: a nearby trajectory
+        if pb.optimize or (violated and self.nlp != "rootfinder"):
             return self._solve_ipopt(pb, wall0, result if result.success else None)
-        if has_path and result.path_min < 0:
-            if self.nlp == "rootfinder":
-                result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"
-                return result
-            return self._solve_ipopt(pb, wall0, result if result.success else None)
+        if violated:
+            result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"
         return result

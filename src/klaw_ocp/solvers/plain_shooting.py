@@ -19,10 +19,9 @@ import time
 
 import numpy as np
 
-from functools import lru_cache
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, path_margin
+from .problem import SubphaseProblem, SubphaseSolution, mapped, path_margin
 
 
 class PlainShootingSolver:
@@ -85,7 +84,7 @@ class PlainShootingSolver:
         """Index of the first interval on which an event armed in the initial mode fires."""
         first = None
         for event in spec.events:
-            values = np.asarray(_mapped(event, len(states))(
+            values = np.asarray(mapped(event.fn, len(states))(
                 states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
                 np.tile(pb.context[:, None], (1, len(states))))).ravel()
             d = event.direction
@@ -360,7 +359,3 @@ class PlainShootingSolver:
                                 msg if not ok or recovery else "", path_min, log, "bisection-secant")
 
 
-
-@lru_cache(maxsize=None)
-def _mapped(event, n):
-    return event.fn.map(n)

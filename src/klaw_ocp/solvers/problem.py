@@ -17,6 +17,7 @@ solve comes back with ``success = False`` and a message, it does not raise midwa
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Callable, Optional, Sequence
 
 import casadi as ca
@@ -52,7 +53,7 @@ class SubphaseSpec:
     final: ca.Function               # (x[nx], c[nc]) -> g[nf]
     outputs: ca.Function             # (x, t, u, c) -> reported forces [no]
     output_names: tuple
-    path: Optional[ca.Function] = None   # (x, t, u, c) -> h[nh] >= 0
+    path: Optional[ca.Function] = None   # (x, t, u, c) -> h[nh] >= lower
     path_names: tuple = ()
     residuals: Optional[ca.Function] = None   # (x, t, u, c) -> r; running cost |r|^2 (optimised formulations)
     events: tuple = ()
@@ -83,7 +84,7 @@ class SubphaseProblem:
     the path functions (e.g. the toe clearance); ``None`` means no inequality is enforced. It may
     also be a callable ``(t, states, context) -> (N+1, nh)``, for inequalities whose nodes depend
     on the motion (the stance lock rule). ``optimize``: solve as the optimal control problem with
-    the spec's cost and every unknown free, even when the square solution is feasible.
+    the spec's residuals and every unknown free, even when the square solution is feasible.
     """
     spec: SubphaseSpec
     x0: np.ndarray
@@ -168,6 +169,12 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
     return np.array(nodes)
 
 
+@lru_cache(maxsize=None)
+def mapped(fn: ca.Function, n: int) -> ca.Function:
+    """``fn`` evaluated on n columns in one call (vector inputs given once are broadcast)."""
+    return fn.map(n)
+
+
 def path_bounds(pb: SubphaseProblem, times: np.ndarray, states: np.ndarray) -> Optional[np.ndarray]:
     """Lower bounds of the path functions at the samples ``times`` (None: no inequality).
 
@@ -188,6 +195,5 @@ def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=No
     lower = path_bounds(pb, times, states)
     if lower is None:
         return float("inf")
-    margins = [np.asarray(pb.spec.path(states[k], times[k], u, pb.context)).ravel() - lower[k]
-               for k in range(len(times))]
-    return float(np.min(margins))
+    values = np.asarray(mapped(pb.spec.path, len(times))(np.asarray(states).T, np.asarray(times), u, pb.context))
+    return float(np.min(values.T - lower))
