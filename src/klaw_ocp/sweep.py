@@ -1,0 +1,416 @@
+"""Parameter sweeps (``klaw-ocp sweep``): many walks over a grid of configuration values.
+
+A sweep takes one experiment mapping (a YAML file or a dict) and, for every dotted config path
+to vary, a list of values. The grid is their Cartesian product in the order given (the first
+path varies slowest); each combination is validated like a config file
+(:meth:`klaw_ocp.config.ExperimentConfig.from_mapping`) before any walk starts, and then walked
+with one or both solver modes. Walks run in this process (``workers=1``), on a local process pool
+('spawn' context: CasADi objects never cross a fork), or on a dask.distributed cluster; the same
+``concurrent.futures`` interface drives all three. Only plain dicts and strings cross process
+boundaries: a worker gets ``(mapping, method)`` and returns one row as a dict
+(:func:`run_walk`); each worker process builds its CasADi Functions once (they are cached per
+process) and reuses them for every walk it gets.
+
+One walk that does not converge never stops the sweep: its row has ``status`` "failed" and
+names the failing step, subphase and residual; any other exception gives ``status`` "error"
+and its one-line message. :func:`write_sweep` writes ``sweep.csv`` (columns:
+:data:`RESULT_COLUMNS` after one column per varied path) and the map ``sweep.png``
+(:mod:`klaw_ocp.io.sweep_plot`). docs/sweep.md has the user's view.
+"""
+from __future__ import annotations
+
+import copy
+import itertools
+import math
+import os
+import re
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import ConfigError, ConvergenceError, KlawError, out_of_range
+
+METHODS = ("multiple-shooting", "plain-shooting")
+#: The largest sweep accepted (walks, counting each method separately).
+MAX_WALKS = 10_000
+#: A range includes its stop when (stop - start) / step is this close (relative) to an integer.
+RANGE_REL_TOL = 1e-9
+#: Range values are rounded to this many significant digits (0.1:0.3:0.1 gives 0.3, not 0.30000000000000004).
+RANGE_DIGITS = 12
+FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
+#: The columns of a row after the varied paths, in CSV order.
+RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
+                  "wall_s", "mean_speed_kmh", "hip_excursion_m", *(f"peak_{c}" for c in FORCE_COLUMNS),
+                  "fallbacks", "message")
+STATUSES = ("ok", "failed", "error")
+
+_PATH = re.compile(r"^[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*$")
+_VARY_ALLOWED = ("PATH=VALUES with PATH a dotted config path (walk.speed) and VALUES a comma list of "
+                 "YAML scalars (1,3,5 or true,false) or ranges start:stop:step with step > 0 (0.5:8:0.5)")
+
+
+# ------------------------------------------------------------------------------ --vary parsing
+
+def parse_vary(text: str) -> tuple[str, list]:
+    """``"walk.speed=1,3,5"`` -> ``("walk.speed", [1, 3, 5])``; one-line ConfigError otherwise."""
+    path, sep, values = str(text).partition("=")
+    path = path.strip()
+    if not sep or not _PATH.match(path):
+        raise ConfigError(out_of_range("--vary", text, _VARY_ALLOWED))
+    return path, parse_values(values, path)
+
+
+def parse_values(text: str, path: str = "PATH") -> list:
+    """A comma list whose items are YAML scalars or inclusive ranges ``start:stop:step``."""
+    items = [item.strip() for item in str(text).split(",")]
+    if not all(items):
+        raise ConfigError(f"--vary {path}: got {text!r} (an empty value), allowed {_VARY_ALLOWED}")
+    values: list = []
+    for item in items:
+        values += _parse_range(item, path) if ":" in item else [_parse_scalar(item, path)]
+        if len(values) > MAX_WALKS:
+            raise ConfigError(f"--vary {path}: got more than {MAX_WALKS} values, allowed at most {MAX_WALKS} walks")
+    return values
+
+
+def _parse_scalar(item: str, path: str):
+    try:
+        value = yaml.safe_load(item)
+    except yaml.YAMLError:
+        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}") from None
+    if isinstance(value, str):  # YAML 1.1 reads 1e-3 as a string; a number is meant
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    if isinstance(value, (list, dict)):
+        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}")
+    return value
+
+
+def _parse_range(item: str, path: str) -> list:
+    """``start:stop:step``; stop is included when it lies on the grid to within RANGE_REL_TOL."""
+    parts = item.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        start, stop, step = (int(p) if re.fullmatch(r"\s*[-+]?\d+\s*", p) else float(p) for p in parts)
+    except ValueError:
+        raise ConfigError(f"--vary {path}: got {item!r}, allowed a range start:stop:step of numbers "
+                          f"(0.5:8:0.5)") from None
+    if not all(math.isfinite(x) for x in (start, stop, step)) or step <= 0:
+        raise ConfigError(f"--vary {path}: got range {item!r}, allowed finite numbers with step > 0")
+    span = (stop - start) / step
+    whole = round(span)
+    count = (whole if abs(span - whole) <= RANGE_REL_TOL * max(1.0, abs(span)) else math.floor(span)) + 1
+    if count < 1:
+        raise ConfigError(f"--vary {path}: got range {item!r}, which yields no value, allowed start <= stop")
+    if count > MAX_WALKS:
+        raise ConfigError(f"--vary {path}: got range {item!r} with {count} values, allowed at most {MAX_WALKS} walks")
+    if all(isinstance(x, int) for x in (start, stop, step)):
+        return [start + i * step for i in range(count)]
+    # RANGE_DIGITS significant digits of the range's scale: 0.30000000000000004 -> 0.3, 5.6e-17 -> 0
+    digits = RANGE_DIGITS - 1 - math.floor(math.log10(max(abs(start), abs(stop), step)))
+    return [round(start + i * step, digits) + 0.0 for i in range(count)]
+
+
+def format_value(value) -> str:
+    """A varied value as written on the command line (YAML style: true, null, 0.5)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def combination_label(values: dict) -> str:
+    return ", ".join(f"{path}={format_value(v)}" for path, v in values.items())
+
+
+# ---------------------------------------------------------------------------- grid, validation
+
+def set_path(mapping: dict, path: str, value) -> None:
+    """Set ``mapping[a][b][c] = value`` for ``path`` "a.b.c", creating missing mappings."""
+    keys = path.split(".")
+    node = mapping
+    for depth, key in enumerate(keys[:-1]):
+        if node.get(key) is None:
+            node[key] = {}
+        node = node[key]
+        if not isinstance(node, dict):
+            where = ".".join(keys[: depth + 1])
+            raise ConfigError(f"--vary {path}: got {where} = {node!r} in the config, allowed a path "
+                              f"through mappings only")
+    node[keys[-1]] = value
+
+
+def read_mapping(config) -> dict:
+    """The experiment as a plain mapping: a dict (copied) or a YAML file (not validated here)."""
+    if isinstance(config, dict):
+        return copy.deepcopy(config)
+    path = Path(config)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(out_of_range("config", str(path), "an existing YAML file (not found)")) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(out_of_range("config", str(path), f"a readable UTF-8 YAML file ({type(exc).__name__})")) from None
+    except yaml.YAMLError as exc:
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{path}: invalid YAML: {problem}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(out_of_range("config", str(path), "a mapping with name, body, walk"))
+    return data
+
+
+def _check_vary(vary: dict) -> dict[str, list]:
+    if not isinstance(vary, dict) or not vary:
+        raise ConfigError(out_of_range("--vary", vary, f"at least one {_VARY_ALLOWED}"))
+    out = {path: list(v) if isinstance(v, (list, tuple, range)) else [v] for path, v in vary.items()}
+    for path, values in out.items():
+        if not isinstance(path, str) or not _PATH.match(path) or not values:
+            raise ConfigError(out_of_range("--vary", f"{path}={values}", _VARY_ALLOWED))
+    return out
+
+
+def _methods(methods) -> tuple | None:
+    chosen = METHODS if methods == "both" else ((methods,) if isinstance(methods, str) else methods)
+    if chosen is not None and (not chosen or any(m not in METHODS for m in chosen)):
+        raise ConfigError(out_of_range("--method", methods, f"one of {', '.join(METHODS)}, both"))
+    return None if chosen is None else tuple(chosen)
+
+
+def expand(config, vary: dict, methods=None) -> tuple[str, list[dict]]:
+    """Validate every combination and list the walks in grid order.
+
+    Returns the base config's name and the tasks ``{"values", "mapping", "method"}``. ``methods``
+    is None (each combination's solver.method), a method, "both", or a sequence of methods.
+    Raises the combination's one-line ConfigError/GaitLimitError, prefixed by the combination.
+    """
+    from .config import ExperimentConfig
+
+    base, vary, chosen = read_mapping(config), _check_vary(vary), _methods(methods)
+    paths = list(vary)
+    n_walks = math.prod(len(v) for v in vary.values()) * (len(chosen) if chosen else 1)
+    if n_walks > MAX_WALKS:
+        raise ConfigError(f"--vary: got {n_walks} walks, allowed at most {MAX_WALKS}")
+    tasks, name = [], None
+    for combo in itertools.product(*vary.values()):
+        values = dict(zip(paths, combo))
+        mapping = copy.deepcopy(base)
+        for path, value in values.items():
+            set_path(mapping, path, value)
+        label = combination_label(values)
+        try:
+            cfg = ExperimentConfig.from_mapping(mapping)
+        except KlawError as exc:
+            raise _prefixed(exc, label) from None
+        name = name or cfg.name
+        for method in chosen or (cfg.solver.method,):
+            if cfg.solver.stance == "tracking" and method != "multiple-shooting":  # as simulate_walk
+                raise ConfigError(f"{label}: solver.stance: got 'tracking' with method {method!r}, allowed "
+                                  f"'monitored' (the tracking stance needs method multiple-shooting)")
+            tasks.append({"values": values, "mapping": mapping, "method": method})
+    return name, tasks
+
+
+def _prefixed(exc: KlawError, label: str) -> KlawError:
+    message = f"{label}: {' '.join(str(exc).split())}"
+    try:
+        return type(exc)(message)
+    except TypeError:
+        return ConfigError(message)
+
+
+def default_out_dir(config) -> Path:
+    """``results/<name>-sweep`` for the config's name."""
+    name = read_mapping(config).get("name")
+    return Path("results") / f"{name if isinstance(name, str) and name else 'sweep'}-sweep"
+
+
+# ------------------------------------------------------------------------------------ one walk
+
+#: One walk at a time per process: CasADi plugins (IPOPT's linear solver) are not thread-safe,
+#: and a dask worker may run several tasks in threads of one process.
+_WALK_LOCK = threading.Lock()
+
+
+def run_walk(mapping: dict, method: str) -> dict:
+    """Walk one validated mapping with ``method``; the result columns of its row, as plain data."""
+    from .walk import simulate_walk
+
+    row: dict[str, Any] = dict.fromkeys(RESULT_COLUMNS)
+    row.update(method=method, status="ok")
+    walk = None
+    with _WALK_LOCK:
+        t0 = time.perf_counter()
+        try:
+            walk = simulate_walk(mapping, method=method, raise_on_failure=True)
+        except ConvergenceError as err:
+            walk = err.partial
+            row.update(status="failed", failed_step=int(err.step), failed_subphase=str(err.subphase),
+                       residual=_float(err.residual), message=_one_line(err))
+        except Exception as exc:  # noqa: BLE001 - any other failure is this walk's, not the sweep's
+            walk = None
+            row.update(status="error", message=_one_line(exc, type(exc).__name__))
+        row["wall_s"] = time.perf_counter() - t0
+    try:
+        if walk is not None:
+            row.update(_walk_metrics(walk, keep_residual=row["status"] != "ok") if walk.steps else {"steps": 0})
+    except Exception as exc:  # noqa: BLE001 - a walk whose results cannot be read is an error row
+        row.update(status="error", message=_one_line(exc, f"reading the walk: {type(exc).__name__}"))
+    return row
+
+
+def _walk_metrics(walk, keep_residual: bool) -> dict:
+    import numpy as np
+
+    from .results import walk_summary, walk_table
+
+    summary, table = walk_summary(walk), walk_table(walk)
+    subs = [(entry.get("index", k), s) for k, entry in enumerate(summary["steps"]) for s in entry["subphases"]]
+    residuals = [s["residual"] for _, s in subs if s.get("residual") is not None]
+    out = {"steps": len(walk.steps), "iterations": int(sum(s.get("iterations", 0) for _, s in subs)),
+           "mean_speed_kmh": _float(summary.get("mean_hip_speed_kmh")),
+           "fallbacks": ";".join(f"step{k}.{s['name']}:{f.get('name') if isinstance(f, dict) else f}"
+                                 for k, s in subs for f in s.get("fallbacks", []))}
+    if not keep_residual:
+        out["residual"] = max(residuals) if residuals else None
+    hip = table["hip_y"][np.isfinite(table["hip_y"])]
+    out["hip_excursion_m"] = float(hip.max() - hip.min()) if hip.size else None
+    for column in FORCE_COLUMNS:
+        values = np.abs(table[column][np.isfinite(table[column])])
+        out[f"peak_{column}"] = float(values.max()) if values.size else None
+    return out
+
+
+def _float(value):
+    return float(value) if value is not None and math.isfinite(float(value)) else None
+
+
+def _one_line(exc: BaseException, prefix: str = "") -> str:
+    text = " ".join(str(exc).split())
+    return f"{prefix}: {text}" if prefix and text else (text or prefix)
+
+
+# ------------------------------------------------------------------------------------ executors
+
+def _executor(workers: int, n_tasks: int, address: str | None):
+    """A concurrent.futures executor and the dask client behind it (None for the local pool)."""
+    if address is None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        context = multiprocessing.get_context("spawn")  # never fork a process that holds CasADi objects
+        return ProcessPoolExecutor(max_workers=min(workers, n_tasks), mp_context=context), None
+    try:
+        from distributed import Client
+    except ImportError:
+        raise KlawError('--scheduler needs dask.distributed, which is not installed: '
+                        'pip install -e ".[cluster]"') from None
+    try:
+        client = Client(address)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise KlawError(f"--scheduler: could not connect to {address!r}: {_one_line(exc)}") from None
+    return client.get_executor(pure=False), client
+
+
+def run_sweep(config, vary: dict, methods=None, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = False) -> list[dict]:
+    """Walk every combination of ``vary`` (path -> list of values) with ``methods``.
+
+    ``config`` is a mapping or a YAML path; ``methods`` None (the config's solver.method), a
+    method name, "both" or a sequence. ``workers`` (default ``os.cpu_count()``) local processes,
+    1 = in this process; ``scheduler`` a dask.distributed address (``workers`` is then the
+    cluster's business). Every combination is validated first. Returns one row per walk and
+    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`.
+    """
+    _, tasks = expand(config, vary, methods)
+    workers = (os.cpu_count() or 1) if workers is None else workers
+    if scheduler is None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ConfigError(out_of_range("--workers", workers, "an integer >= 1"))
+    from tqdm import tqdm
+
+    results: list[dict | None] = [None] * len(tasks)
+    bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
+    try:
+        if scheduler is None and (workers == 1 or len(tasks) == 1):
+            for i, task in enumerate(tasks):
+                results[i] = run_walk(task["mapping"], task["method"])
+                bar.update()
+        else:
+            executor, client = _executor(workers, len(tasks), scheduler)
+            try:
+                _run_on(executor, tasks, results, bar)
+            finally:
+                executor.shutdown(wait=True)
+                if client is not None:
+                    client.close()
+    finally:
+        bar.close()
+    return [{**task["values"], **result} for task, result in zip(tasks, results)]
+
+
+def _run_on(executor, tasks: list[dict], results: list, bar) -> None:
+    from concurrent.futures import as_completed
+
+    futures = {executor.submit(run_walk, task["mapping"], task["method"]): i for i, task in enumerate(tasks)}
+    try:
+        for future in as_completed(futures):
+            i = futures[future]
+            try:
+                results[i] = future.result()
+            except Exception as exc:  # noqa: BLE001 - a worker process died or the cluster lost the task
+                results[i] = {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": "error",
+                              "message": _one_line(exc, f"worker: {type(exc).__name__}")}
+            bar.update()
+    except BaseException:  # Ctrl-C: drop the walks not started yet, then let shutdown wait for the rest
+        for future in futures:
+            future.cancel()
+        raise
+
+
+# ---------------------------------------------------------------------------------- the files
+
+def counts(rows: list[dict]) -> dict[str, int]:
+    """Walks per status: {"ok": .., "failed": .., "error": ..}."""
+    return {status: sum(row["status"] == status for row in rows) for status in STATUSES}
+
+
+def _cell(value) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return ""
+    return format_value(value)
+
+
+def sweep_csv(rows: list[dict], varied_paths: list[str]) -> str:
+    import csv
+    import io
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow([*varied_paths, *RESULT_COLUMNS])
+    for row in rows:
+        writer.writerow([_cell(row.get(c)) for c in (*varied_paths, *RESULT_COLUMNS)])
+    return buffer.getvalue()
+
+
+def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = None) -> dict[str, Path]:
+    """Write ``sweep.csv`` and ``sweep.png`` into ``out_dir`` (atomically); returns name -> path."""
+    from .io.sweep_plot import write_sweep_png
+    from .io.writers import atomic_write_text
+
+    out = Path(out_dir)
+    paths = {"csv": out / "sweep.csv", "png": out / "sweep.png"}
+    atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
+    write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
+    return paths
+
+
+def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:
+    n = counts(rows)
+    return (f"{len(rows)} walks: {n['ok']} ok, {n['failed']} failed, {n['error']} error; "
+            f"wrote {paths['csv']} and {paths['png']}")
