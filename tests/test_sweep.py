@@ -1,0 +1,237 @@
+"""``klaw-ocp sweep``: --vary parsing, validation before any walk, the files, failures, executors."""
+import csv
+import math
+
+import pytest
+import yaml
+
+from klaw_ocp import sweep
+from klaw_ocp.cli import main
+from klaw_ocp.errors import ConfigError, ConvergenceError
+
+HEADER = ["walk.speed", "method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
+          "wall_s", "mean_speed_kmh", "hip_excursion_m", "peak_F_w", "peak_F_theta1", "peak_F_theta2",
+          "peak_pa", "peak_F_theta3", "peak_F_theta4", "fallbacks", "message"]
+NUMERIC = HEADER[5:17]
+SHORT = {"name": "short", "body": {"height": 1.8, "mass": 80},
+         "walk": {"speed": 5.0, "steps": 2}, "solver": {"method": "plain-shooting"}}
+
+
+def _write_config(folder, data=SHORT):
+    path = folder / "short.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.fixture
+def short_config(tmp_path):
+    return _write_config(tmp_path)
+
+
+def _read(path):
+    with open(path, newline="") as handle:
+        return list(csv.reader(handle))
+
+
+def _without_wall(table):
+    col = table[0].index("wall_s")
+    return [row[:col] + row[col + 1:] for row in table]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """walk.speed=4,5 with plain shooting in this process: sweep.csv's rows."""
+    folder = tmp_path_factory.mktemp("reference")
+    config = _write_config(folder)
+    assert main(["sweep", str(config), "--vary", "walk.speed=4,5", "--workers", "1", "--quiet",
+                 "--out", str(folder / "out")]) == 0
+    return config, _read(folder / "out" / "sweep.csv")
+
+
+# ------------------------------------------------------------------------------------ parsing
+
+@pytest.mark.parametrize("text, expected", [
+    ("1,3,5", [1, 3, 5]),
+    ("true,false", [True, False]),
+    ("0:1:0.3", [0, 0.3, 0.6, 0.9]),
+    ("0.1:0.3:0.1", [0.1, 0.2, 0.3]),
+    ("1:5:2", [1, 3, 5]),
+    ("1,2:4:1, 7.5", [1, 2, 3, 4, 7.5]),
+    ("null,0.7", [None, 0.7]),
+    ("1e-3", [0.001]),
+    ("multiple-shooting", ["multiple-shooting"]),
+])
+def test_values(text, expected):
+    assert sweep.parse_values(text) == expected
+
+
+def test_inclusive_range():
+    values = sweep.parse_values("0.5:8:0.5")
+    assert len(values) == 16 and values[0] == 0.5 and values[-1] == 8.0
+    assert sweep.parse_values("0:1:0.3")[-1] == 0.9                      # 1 is not on the grid
+    assert [type(v) for v in sweep.parse_values("10:30:10")] == [int] * 3  # solver.intervals stays int
+    assert sweep.parse_vary("walk.speed=1,3,5") == ("walk.speed", [1, 3, 5])
+
+
+@pytest.mark.parametrize("vary", ["walk.speed", "walk.speed=", "walk.speed=1,,2", "walk.speed=1,", "=1,2",
+                                  "walk..speed=1", "walk.speed=1:2:0", "walk.speed=1:2:-1", "walk.speed=2:1:0.5",
+                                  "walk.speed=1:2", "walk.speed=a:b:c", "walk.speed=[1,2]",
+                                  "walk.speed=0.5:8:0.0001"])
+def test_bad_vary_exits_2_with_one_line(vary, short_config, tmp_path, capsys):
+    assert main(["sweep", str(short_config), "--vary", vary, "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("klaw-ocp: error: --vary") and "Traceback" not in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--vary", "walk.speed=1:9:0.01", "--vary", "body.height=1.5:2:0.01"], ["--vary", "walk"]),
+    (["--vary", "walk.speed=1", "--vary", "walk.speed=2"], ["twice"]),
+    (["--vary", "walk.speed=4", "--workers", "0"], ["--workers"]),
+    (["--vary", "walk.speed.x=1"], ["mappings"]),
+])
+def test_bad_sweep_arguments_exit_2(args, words, short_config, tmp_path, capsys):
+    assert main(["sweep", str(short_config), *args, "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and all(w in err[0] for w in words)
+    assert not (tmp_path / "o").exists()
+
+
+def test_help(capsys):
+    assert main(["sweep", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--vary" in out and "--scheduler" in out and "start:stop:step" in out
+
+
+# ---------------------------------------------------------------------------- grid, validation
+
+def test_invalid_combination_is_refused_before_any_walk(short_config, tmp_path, capsys, monkeypatch):
+    ran = []
+    monkeypatch.setattr(sweep, "run_walk", lambda *args: ran.append(args))
+    out = tmp_path / "o"
+    assert main(["sweep", str(short_config), "--vary", "walk.speed=5,50", "--vary", "walk.start_from_rest=true,false",
+                 "--workers", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "walk.speed=50, walk.start_from_rest=true: walk.speed: got 50" in err[0]
+    assert ran == [] and not out.exists()
+
+
+def test_grid_order_paths_and_methods():
+    base = {k: v for k, v in SHORT.items() if k != "solver"}
+    name, tasks = sweep.expand(base, {"walk.speed": [4, 5], "attributes.pelvic_list": [3.0, 5.0]}, "both")
+    assert name == "short" and len(tasks) == 8
+    assert [(t["values"]["walk.speed"], t["values"]["attributes.pelvic_list"], t["method"]) for t in tasks[:3]] == [
+        (4, 3.0, "multiple-shooting"), (4, 3.0, "plain-shooting"), (4, 5.0, "multiple-shooting")]
+    assert tasks[0]["mapping"]["attributes"] == {"pelvic_list": 3.0}   # created on the way
+    assert "attributes" not in base                                      # the base is not touched
+    _, tasks = sweep.expand(base, {"solver.method": ["plain-shooting", "multiple-shooting"]})
+    assert [t["method"] for t in tasks] == ["plain-shooting", "multiple-shooting"]  # the config's method
+
+
+def test_tracking_stance_with_plain_shooting_is_refused_up_front():
+    data = {**SHORT, "solver": {"stance": "tracking"}}
+    with pytest.raises(ConfigError, match=r"walk.speed=4: solver.stance"):
+        sweep.expand(data, {"walk.speed": [4]}, "both")
+
+
+# ------------------------------------------------------------------------------------ the files
+
+def test_end_to_end_both_methods(short_config, tmp_path, capsys):
+    out = tmp_path / "o"
+    code = main(["sweep", str(short_config), "--vary", "walk.speed=4,5", "--method", "both", "--workers", "1",
+                 "--out", str(out), "--quiet"])
+    printed = capsys.readouterr().out.strip().splitlines()
+    assert code == 0
+    assert printed == [f"4 walks: 4 ok, 0 failed, 0 error; wrote {out / 'sweep.csv'} and {out / 'sweep.png'}"]
+    table = _read(out / "sweep.csv")
+    assert table[0] == HEADER and len(table) == 5
+    rows = [dict(zip(HEADER, r)) for r in table[1:]]
+    assert [(r["walk.speed"], r["method"]) for r in rows] == [
+        ("4", "multiple-shooting"), ("4", "plain-shooting"), ("5", "multiple-shooting"), ("5", "plain-shooting")]
+    for r in rows:
+        assert r["status"] == "ok" and r["steps"] == "2" and r["failed_step"] == r["message"] == ""
+        assert all(math.isfinite(float(r[c])) for c in NUMERIC)
+        assert float(r["residual"]) < 1e-6 and int(r["iterations"]) > 0 and float(r["peak_F_w"]) > 0
+        assert float(r["mean_speed_kmh"]) == pytest.approx(float(r["walk.speed"]), abs=0.05)
+        assert 0 < float(r["hip_excursion_m"]) < 0.2
+    assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_failures_are_rows_and_do_not_stop_the_sweep(short_config, tmp_path, capsys, monkeypatch):
+    from klaw_ocp.control.step import StepController
+    original = StepController.solve_step
+
+    def flaky(self, plan, inp, k, *args, **kwargs):
+        speed = plan.parameters.speed_kmh
+        if k == 1 and abs(speed - 4.0) < 1e-9:
+            raise ConvergenceError(1, "swing2", 0.031, "forced for the test")
+        if abs(speed - 4.5) < 1e-9:
+            raise RuntimeError("boom\nsecond line")
+        return original(self, plan, inp, k, *args, **kwargs)
+
+    monkeypatch.setattr(StepController, "solve_step", flaky)
+    out = tmp_path / "o"
+    assert main(["sweep", str(short_config), "--vary", "walk.speed=4:5:0.5", "--workers", "1", "--out", str(out),
+                 "--quiet"]) == 1
+    assert capsys.readouterr().out.startswith("3 walks: 1 ok, 1 failed, 1 error;")
+    table = _read(out / "sweep.csv")
+    failed, error, ok = (dict(zip(HEADER, r)) for r in table[1:])
+    assert (failed["walk.speed"], failed["status"], failed["failed_step"], failed["failed_subphase"]) == (
+        "4.0", "failed", "1", "swing2")
+    assert float(failed["residual"]) == 0.031 and failed["steps"] == "1" and "step 1" in failed["message"]
+    assert float(failed["peak_F_w"]) > 0                                  # from the completed step
+    assert error["status"] == "error" and error["message"] == "RuntimeError: boom second line"
+    assert error["failed_step"] == error["residual"] == ""
+    assert ok["status"] == "ok" and ok["steps"] == "2"
+    assert (out / "sweep.png").exists()
+
+
+def test_fallbacks_column_reads_the_summary(monkeypatch):
+    import klaw_ocp.results as results
+    original = results.walk_summary
+
+    def with_fallbacks(walk):
+        summary = original(walk)
+        summary["steps"][1]["subphases"][2]["fallbacks"] = ["ipopt", "smaller-step"]
+        return summary
+
+    monkeypatch.setattr(results, "walk_summary", with_fallbacks)
+    row = sweep.run_walk(SHORT, "plain-shooting")
+    assert row["status"] == "ok" and row["fallbacks"] == "step1.swing2:ipopt;step1.swing2:smaller-step"
+
+
+def test_map_with_three_paths_and_categories(tmp_path):
+    from klaw_ocp.io.sweep_plot import write_sweep_png
+    rows = [{"walk.speed": v, "walk.start_from_rest": r, "body.height": h, "method": m,
+             "status": "failed" if (v, r, h) == (3, True, 1.7) else "ok", "wall_s": 1.0 + v,
+             "failed_step": 0, "failed_subphase": "stance"}
+            for v in (1, 3) for r in (True, False) for h in (1.7, 1.8) for m in sweep.METHODS]
+    path = write_sweep_png(rows, ["walk.speed", "walk.start_from_rest", "body.height"], tmp_path / "m.png")
+    assert path.read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------------------------ executors
+
+def test_process_pool_gives_the_same_rows(reference, tmp_path):
+    config, expected = reference
+    assert main(["sweep", str(config), "--vary", "walk.speed=4,5", "--workers", "2", "--quiet",
+                 "--out", str(tmp_path / "o")]) == 0
+    assert _without_wall(_read(tmp_path / "o" / "sweep.csv")) == _without_wall(expected)
+
+
+def test_dask_cluster_gives_the_same_rows(reference, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    config, expected = reference
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        assert main(["sweep", str(config), "--vary", "walk.speed=4,5", "--scheduler", cluster.scheduler_address,
+                     "--quiet", "--out", str(tmp_path / "o")]) == 0
+    assert _without_wall(_read(tmp_path / "o" / "sweep.csv")) == _without_wall(expected)
+
+
+def test_missing_dask_is_one_line(short_config, tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(__import__("sys").modules, "distributed", None)   # import distributed -> ImportError
+    assert main(["sweep", str(short_config), "--vary", "walk.speed=4", "--scheduler", "tcp://127.0.0.1:8786",
+                 "--quiet", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'pip install -e ".[cluster]"' in err[0]
