@@ -65,6 +65,38 @@ def reach_pitch(body: Body, hip: np.ndarray, metatarsal_x: float) -> float:
     return brentq(reach, 0.0, math.radians(89), xtol=1e-15)
 
 
+#: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at
+#: least this far behind its heel-strike angle theta3 (eq. 3). See :func:`toe_off_pitch`.
+MIN_SWING1_THIGH_TRAVEL = 0.15
+
+
+def toe_off_pitch(body: Body, hip: np.ndarray, metatarsal_x: float, pitch_start: float, pitch_wanted: float,
+                  theta3_target: float) -> float:
+    """Foot pitch at toe-off: the ``toe_off_foot_pitch`` attribute, lowered if needed so that the
+    thigh is not ahead of ``theta3_target + MIN_SWING1_THIGH_TRAVEL``.
+
+    Swing1 carries the thigh forward to its heel-strike angle while the ankle travels forward along
+    curve P (section 4.3). Raising the heel with the hip still above the foot, as in the first step
+    from standing, bends the knee forwards and puts the thigh ahead of that angle; swing1 would then
+    have to swing the thigh back while the ankle moves forward, which drives the kinematic knee
+    through full extension, where the ankle-on-curve-P constraint is singular (its derivative in
+    theta4 vanishes) and the subphase has no well-defined solution. A person starting to walk
+    raises the heel only as far as the hip has moved over the foot; so does this rule. In steady
+    walking the hip is well ahead of the hind foot at toe-off and the attribute applies unchanged.
+    """
+    wanted = max(pitch_wanted, pitch_start)
+    reach = reach_pitch(body, hip, metatarsal_x)
+    bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
+    thigh = lambda pitch: leg_angles(body, hip, hind_ankle(body, metatarsal_x, pitch))[0] - bound
+    if thigh(max(wanted, reach)) >= 0:      # :func:`hind_leg` raises the pitch to the reach pitch
+        return wanted
+    lowest = max(pitch_start, reach)
+    if thigh(lowest) <= 0:
+        return lowest
+    # the thigh angle falls monotonically as the heel rises (the ankle comes up towards the hip)
+    return brentq(thigh, lowest, wanted, xtol=1e-13)
+
+
 @dataclass(frozen=True)
 class HindLeg:
     """The hind leg at one instant of double support (world frame)."""

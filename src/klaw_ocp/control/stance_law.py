@@ -23,7 +23,7 @@ from functools import lru_cache
 import casadi as ca
 
 from ..body import DYNAMIC_PARAMETER_NAMES
-from ..dynamics.stance import stance_accelerations_sx
+from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from .layout import VectorLayout
 from .torques import (hip_height_reference, leg_force, piecewise_linear, position_actuator, spring_damper,
                       step_torque)
@@ -50,11 +50,10 @@ def body_vector(c: ca.SX) -> ca.SX:
 
 
 def hip_height(x):
-    """Hip height above the stance ankle and its rate (``dynamics.hip_kinematics_sx``, written
-    out: the first swing from rest is sensitive to the round-off of this expression, see
-    docs/solvers.md)."""
-    w, th1, wd, th1d = x[0], x[1], x[3], x[4]
-    return w * ca.cos(th1), wd * ca.cos(th1) - w * th1d * ca.sin(th1)
+    """Hip height above the stance ankle and its rate, from the dynamics' hip kinematics (the one
+    definition of the stance geometry, :func:`klaw_ocp.dynamics.stance.hip_kinematics_sx`)."""
+    pos, vel, _ = hip_kinematics_sx(x[0:3], x[3:6], ca.DM.zeros(3))
+    return pos[1], vel[1]
 
 
 @lru_cache(maxsize=None)

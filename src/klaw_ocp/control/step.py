@@ -17,8 +17,12 @@ from ..body import Body
 from ..dynamics import knee_lock_map, stance_hip
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
+#: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
+#: (steady steps: about 0.43 from the toe-under-knee rule). See docs/solvers.md, "The first step".
+MIN_CURVE_P_TRAVEL = 0.4
+
 from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
-                             swing1_end_posture)
+                             swing1_end_posture, toe_off_pitch)
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import lock_rule_nodes, stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
@@ -162,15 +166,15 @@ class StepController:
         mt_x = inp.hind_ankle_x + metatarsal_offset(b)
         hip0, _ = hip_world(stance.states[0])
         pitch0 = reach_pitch(b, hip0, mt_x)
-        pitch_to = max(math.radians(a.toe_off_foot_pitch), pitch0)
+        x_to = stance_at(t_to)
+        hip_to, hip_vel_to = hip_world(x_to)
+        pitch_to = toe_off_pitch(b, hip_to, mt_x, pitch0, math.radians(a.toe_off_foot_pitch), con.theta3)
         ds_nodes = [k for k in range(len(stance.t)) if stance.t[k] <= t_to + 1e-12]
         ds = {"t": [], "theta3": [], "theta4": [], "pitch": []}
         for k in ds_nodes:
             leg = hind_leg(b, hip_world(stance.states[k])[0], mt_x, stance.t[k], t_to, pitch0, pitch_to)
             for key, val in (("t", stance.t[k]), ("theta3", leg.theta3), ("theta4", leg.theta4), ("pitch", leg.pitch)):
                 ds[key].append(val)
-        x_to = stance_at(t_to)
-        hip_to, hip_vel_to = hip_world(x_to)
         eps = 1e-5   # central difference of the kinematic hind leg along the hip's motion
         leg_to = hind_leg(b, hip_to, mt_x, t_to, t_to, pitch0, pitch_to)
         leg_before = hind_leg(b, hip_to - eps * hip_vel_to, mt_x, t_to - eps, t_to, pitch0, pitch_to)
@@ -186,7 +190,8 @@ class StepController:
         # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
         ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 0.01 * b.l1)
         a0, x0 = leg_to.ankle[1], leg_to.ankle[0]
-        d_travel, a_min = ankle_t1[0] - x0, ankle_t1[1]
+        a_min = ankle_t1[1]
+        d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
         a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                     max(a0, a_min) + 0.01 * b.l1)
         coeffs = curve_p_coefficients(a0, a_max, a_min, a.swing_peak_position * d_travel, d_travel)
