@@ -99,7 +99,8 @@ def walk_summary(walk) -> dict:
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
             "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
             "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
-            "path_min": _finite(s.path_min), "nlp": s.nlp,
+            "path_min": _finite(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
+            "build_s": float(s.build_s),
         } for s in step.subphases]
         steps.append(entry)
     hip = walk_table(walk) if walk.steps else None

@@ -113,6 +113,24 @@ def _ipopt(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_it
     return ca.nlpsol(f"{spec.name}_ms_ipopt", "ipopt", nlp, opts)
 
 
+class _Call:
+    """Book-keeping of one ``solve``: its start, the one-off build time and the fallbacks taken."""
+
+    def __init__(self):
+        self.wall0, self.build_s, self.fallbacks = time.perf_counter(), 0.0, []
+
+    def built(self, factory, *args):
+        """``factory(*args)`` (a cached solver build), its time kept out of the solve time."""
+        t0 = time.perf_counter()
+        solver = factory(*args)
+        self.build_s += time.perf_counter() - t0
+        return solver
+
+    def note(self, fallback: str) -> None:
+        if fallback not in self.fallbacks:
+            self.fallbacks.append(fallback)
+
+
 class MultipleShootingSolver:
     """Solve subphases by multiple shooting; see the module docstring for the formulation.
 
@@ -137,7 +155,7 @@ class MultipleShootingSolver:
                   np.tile(pb.context[:, None], (1, self.intervals)))
         return np.asarray(xs).T
 
-    def _initial_guess(self, pb: SubphaseProblem, free: list) -> tuple[np.ndarray, np.ndarray]:
+    def _initial_guess(self, pb: SubphaseProblem, free: list, call: _Call) -> tuple[np.ndarray, np.ndarray]:
         """Free parameters and node states to start Newton from.
 
         A simulation with the given guess initialises the nodes. When its final conditions are
@@ -163,6 +181,7 @@ class MultipleShootingSolver:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
                 break
+            call.note("cold-start-newton")
             for damping in (1.0, 0.5, 0.25, 0.125):
                 trial = u.copy(); trial[free] += damping * step
                 xs_trial = self._simulate(pb, trial)
@@ -173,6 +192,7 @@ class MultipleShootingSolver:
             else:
                 break
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
+            call.note("bracket")
             u, xs = self._bracket_guess(pb, free[0], u, final)
         return u, np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
 
@@ -209,7 +229,7 @@ class MultipleShootingSolver:
                     return trial, xs
         return best_u, best_xs
 
-    def _finish(self, pb, z, u, iterations, wall0, message, success_hint, nlp="rootfinder") -> SubphaseSolution:
+    def _finish(self, pb, z, u, iterations, call: _Call, message, success_hint, nlp="rootfinder") -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
         states = np.vstack([pb.x0, np.asarray(z[: n * spec.nx]).reshape(n, spec.nx)])
         # The reported residual is that of the discrete trajectory the solver returns.
@@ -223,21 +243,22 @@ class MultipleShootingSolver:
         msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
         return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
                                 states, forces, max(residual, defect), iterations, bool(ok),
-                                time.perf_counter() - wall0, msg, path_min, nlp=nlp)
+                                time.perf_counter() - call.wall0 - call.build_s, msg, path_min, nlp=nlp,
+                                fallbacks=list(call.fallbacks), build_s=call.build_s)
 
     # -- the two NLP forms ---------------------------------------------------------------------
-    def _solve_square(self, pb: SubphaseProblem, wall0: float) -> SubphaseSolution:
+    def _solve_square(self, pb: SubphaseProblem, call: _Call) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
         free_mask = tuple(not f for f in pb.fixed)
-        rf = _rootfinder(spec, n, self.substeps, free_mask, self.tolerance, self.max_iterations)
+        rf = call.built(_rootfinder, spec, n, self.substeps, free_mask, self.tolerance, self.max_iterations)
         free = [i for i, f in enumerate(free_mask) if f]
-        u0, xs0 = self._initial_guess(pb, free)
+        u0, xs0 = self._initial_guess(pb, free, call)
         z0 = np.concatenate([xs0.ravel(), u0[free]])
         z = np.asarray(rf(z0, self._params(pb, pb.guess))).ravel()
         stats = rf.stats()
         u = pb.guess.copy()
         u[list(free_mask)] = z[n * spec.nx:]
-        result = self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), wall0,
+        result = self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), call,
                               "", bool(stats.get("success", True)))
         if not result.success and len(free) == 1:
             # Newton on the full system can stall where swing1's kinematic knee is near-singular;
@@ -246,19 +267,20 @@ class MultipleShootingSolver:
             final = lambda xs: np.asarray(spec.final(xs[-1], pb.context)).ravel()
             u_ss, xs = self._bracket_guess(pb, free[0], u0, final, tol=self.tolerance)
             z_ss = np.concatenate([xs.ravel(), u_ss[free]])
-            polished = self._finish(pb, z_ss, u_ss, result.iterations, wall0, "", True)
+            call.note("single-shooting-root")
+            polished = self._finish(pb, z_ss, u_ss, result.iterations, call, "", True)
             if polished.success:
                 polished.message = "Newton stalled; single-shooting root of the same equations"
                 return polished
         return result
 
-    def _solve_ipopt(self, pb: SubphaseProblem, wall0: float, start: SubphaseSolution | None) -> SubphaseSolution:
+    def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
-        solver = _ipopt(spec, n, self.substeps, self.tolerance, self.max_iterations)
+        solver = call.built(_ipopt, spec, n, self.substeps, self.tolerance, self.max_iterations)
         if start is not None and np.all(np.isfinite(start.states)):
             u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
-            u0, xs0 = self._initial_guess(pb, [])
+            u0, xs0 = self._initial_guess(pb, [], call)
         z0 = np.concatenate([xs0.ravel(), u0])
         # an optimised formulation is judged by its cost alone; otherwise stay near the nominal unknowns
         weights = np.array([1.0 if f and spec.residuals is None else 0.0 for f in pb.fixed])
@@ -280,7 +302,7 @@ class MultipleShootingSolver:
             stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
             z0 = np.asarray(sol["x"]).ravel()
-            result = self._finish(pb, z0, z0[n * spec.nx:], iterations, wall0,
+            result = self._finish(pb, z0, z0[n * spec.nx:], iterations, call,
                                   "" if stats.get("success") else str(stats.get("return_status")),
                                   bool(stats.get("success")), "ipopt")
             if not result.success:
@@ -291,18 +313,20 @@ class MultipleShootingSolver:
         return result
 
     def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
-        wall0 = time.perf_counter()
+        call = _Call()
         if pb.grid.size != self.intervals + 1:
             raise ValueError(f"{pb.spec.name}: grid has {pb.grid.size - 1} intervals, solver {self.intervals}")
         has_path = pb.spec.path is not None and pb.path_lower is not None
         # straight to IPOPT: an optimisation with a warm start, or nlp="ipopt" on an inequality problem
         if (self._warm(pb) if pb.optimize else self.nlp == "ipopt" and has_path):
-            return self._solve_ipopt(pb, wall0, None)
-        result = self._solve_square(pb, wall0)
+            return self._solve_ipopt(pb, call, None)
+        result = self._solve_square(pb, call)
         violated = has_path and result.path_min < 0
         # a cold optimisation, or a repair, starts from the square solution: a nearby trajectory
         if pb.optimize or (violated and self.nlp != "rootfinder"):
-            return self._solve_ipopt(pb, wall0, result if result.success else None)
+            if not pb.optimize:
+                call.note("ipopt-repair")
+            return self._solve_ipopt(pb, call, result if result.success else None)
         if violated:
             result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"
         return result

@@ -37,6 +37,7 @@ class PlainShootingSolver:
         self.bisection_steps, self.max_sweeps = int(bisection_steps), int(max_sweeps)
         self.max_recovery_steps = int(max_recovery_steps)
         self.shots = 0
+        self._fallbacks: list = []
 
     # -- forward integration with events --------------------------------------------------------
     def simulate(self, pb: SubphaseProblem, u: np.ndarray):
@@ -211,6 +212,7 @@ class PlainShootingSolver:
         if np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance:
             return u1, residual, shots
         if sum(not f for f in pb.fixed) > 1:
+            self._note("broyden")
             u2, residual2, n = self._broyden(pb, start.copy())
             shots += n
             if np.all(np.isfinite(residual2)) and np.max(np.abs(residual2)) <= self.tolerance:
@@ -220,6 +222,7 @@ class PlainShootingSolver:
         if not np.all(np.isfinite(offset0)):
             return u1, residual, shots
         u = start
+        self._note("homotopy")
         for lam in np.linspace(1 / 16, 1.0, 16):
             u, residual, n = self._sweeps(pb, u, (1 - lam) * offset0)
             shots += n
@@ -326,23 +329,71 @@ class PlainShootingSolver:
             jac[:, col] = (final(trial)[[j0, j1]] - residual[[j0, j1]]) / du
         direct, swapped = abs(jac[0, 0] * jac[1, 1]), abs(jac[0, 1] * jac[1, 0])
         if np.isfinite(direct + swapped) and swapped > direct:
+            self._note("swapped-pairing")
             return [(i0, j1), (i1, j0)], 2
         return pairs, 2
 
+    def _note(self, fallback: str) -> None:
+        if fallback not in self._fallbacks:
+            self._fallbacks.append(fallback)
+
+    def _recover(self, pb: SubphaseProblem, u: np.ndarray):
+        """The paper's recovery loop: the smallest number k of ``recovery_step`` increments of the
+        fixed unknowns (the swing2 hip actuator) after which, with the free unknowns solved again,
+        the path inequality (toe clearance) holds.
+
+        The paper raises the actuator one increment at a time. Clearance grows with the actuator,
+        so the same smallest k is found by doubling k until the toe clears and then bisecting
+        between the last k that did not clear and the first that did: about 2 log2(k) solves
+        instead of k (k reached 300 in first steps from rest).
+        Returns (u, residual, shots, k); k = 0 when no increment is needed.
+        """
+        step = np.asarray(pb.recovery_step, float)
+        solved = {0: u}
+
+        def attempt(k):
+            nearest = solved[min(solved, key=lambda j: abs(j - k))]
+            trial = nearest + (k - min(solved, key=lambda j: abs(j - k))) * step
+            u_k, residual, n = self._solve_free(pb, trial)
+            times, states, _, _ = self.simulate(pb, u_k)
+            ok = (np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance
+                  and path_margin(pb, states, u_k, times) >= 0)
+            solved[k] = u_k
+            return ok, residual, n + 1
+
+        shots, lo, hi, result = 0, 0, 1, None
+        while hi <= self.max_recovery_steps:
+            ok, residual, n = attempt(hi)
+            shots += n
+            if ok:
+                result = (solved[hi], residual)
+                break
+            lo, hi = hi, 2 * hi
+        if result is None:   # not cleared within max_recovery_steps: report the last attempt
+            return solved[lo], residual, shots, lo
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            ok, residual, n = attempt(mid)
+            shots += n
+            if ok:
+                hi, result = mid, (solved[mid], residual)
+            else:
+                lo = mid
+        return result[0], result[1], shots, hi
+
     def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
         wall0 = time.perf_counter()
+        self._fallbacks = []
         u = pb.guess.copy()
         u, residual, shots = self._solve_free(pb, u)
         recovery = 0
         if pb.recovery_step is not None and pb.path_lower is not None:
-            while recovery < self.max_recovery_steps:
-                times, states, _, _ = self.simulate(pb, u)
-                if path_margin(pb, states, u, times) >= 0:
-                    break
-                u = u + np.asarray(pb.recovery_step)
-                u, residual, n = self._solve_free(pb, u)
-                shots += n + 1
-                recovery += 1
+            times, states, _, _ = self.simulate(pb, u)
+            shots += 1
+            if path_margin(pb, states, u, times) < 0:
+                self._note("recovery-loop")
+                u, residual, n, recovery = self._recover(pb, u)
+                shots += n
         times, states, c, log = self.simulate(pb, u)
         residual = np.asarray(pb.spec.final(states[-1], c)).ravel()
         res = float(np.max(np.abs(residual))) if np.all(np.isfinite(residual)) else float("inf")
@@ -356,6 +407,5 @@ class PlainShootingSolver:
             msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
         return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
                                 times, states, forces, res, shots, bool(ok), time.perf_counter() - wall0,
-                                msg if not ok or recovery else "", path_min, log, "bisection-secant")
-
-
+                                msg if not ok or recovery else "", path_min, log, "bisection-secant",
+                                fallbacks=list(self._fallbacks))

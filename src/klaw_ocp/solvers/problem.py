@@ -136,6 +136,12 @@ class SubphaseSolution:
     events: list = field(default_factory=list)
     #: which algorithm produced it: "rootfinder", "ipopt" or "bisection-secant"
     nlp: str = ""
+    #: the fallbacks this solve needed beyond the mode's plain method, in order (docs/solvers.md):
+    #: "cold-start-newton", "bracket", "single-shooting-root", "ipopt-repair" (multiple shooting);
+    #: "swapped-pairing", "broyden", "homotopy", "recovery-loop" (plain shooting)
+    fallbacks: list = field(default_factory=list)
+    #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
+    build_s: float = 0.0
 
     @property
     def status(self) -> str:
