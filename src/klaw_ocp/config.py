@@ -26,7 +26,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from .body import Body
-from .errors import ConfigError, KlawError, out_of_range
+from .errors import ConfigError, GaitLimitError, KlawError, out_of_range
 from .gait import LocomotionAttributes, StepPlan, plan_steps
 
 class _FieldError(ValueError):
@@ -250,8 +250,10 @@ def _one_line(exc: ValidationError) -> ConfigError:
     kind, loc = err["type"], err["loc"]
     field = _path(loc)
     if isinstance(cause, KlawError):
-        # Raised by the paper's checks, already one line and naming its own field path.
-        return ConfigError(str(cause).splitlines()[0] + more)
+        # Raised by the paper's checks, already one line and naming its own field path; a walk
+        # outside the supported envelope stays a GaitLimitError (docs/envelope.md).
+        kind_of = GaitLimitError if isinstance(cause, GaitLimitError) else ConfigError
+        return kind_of(str(cause).splitlines()[0] + more)
     if isinstance(cause, _FieldError):
         return ConfigError(f"{field}: got {cause.got}, allowed {cause.allowed}{more}")
     if kind == "extra_forbidden":

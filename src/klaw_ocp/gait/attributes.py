@@ -71,6 +71,11 @@ _SPECS = [
     _spec("limits", "step_length_max_rel", "l1", 1.4, 0.5, 2.5,
           "§3 'within anatomical limits'; maximum step length relative to leg length, " + _OURS),
     _spec("limits", "step_length_min_rel", "l1", 0.2, 0.01, 1.0, _OURS),
+    _spec("limits", "max_speed_change_per_step", "km/h", 1.0, 0.05, 3.0,
+          "§2.4 principle 1: parameters may change 'with a granularity of one step'; the largest change "
+          "of a schedule from one step to the next that the solvers support, " + _OURS),
+    _spec("limits", "max_step_length_change_rel", "l1", 0.15, 0.01, 0.5,
+          "§2.4 principle 1; the largest step-length change from one step to the next, " + _OURS),
     _spec("limits", "parameter_consistency_tolerance", "1", 0.01, 1e-6, 0.2,
           "§3 v = sl·sf must hold when all three are given; relative tolerance " + _OURS),
     # -- timing (section 4.2, 4.3)

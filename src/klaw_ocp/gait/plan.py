@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from ..body import Body
 from ..errors import ConfigError, out_of_range
 from .attributes import LocomotionAttributes, resolve
+from .envelope import check_body, check_step_changes
 from .parameters import LocomotionParameters, complete_parameters
 from .symmetry import StepConstraints, step_constraints
 from .timings import StateTimings, state_phase_timings
@@ -169,6 +170,7 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         raise ConfigError(out_of_range("walk.duration", duration, "a finite number > 0 in s"))
 
     base_values = _request_values(base_request, "walk")
+    check_body(body)
     entries, positions = _parse_schedule(body, schedule, attrs)
     if any(v is not None for v in base_values.values()):
         base = _complete(body, base_values, attrs, "walk")
@@ -201,4 +203,5 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
     if last_step >= len(plans):
         raise ConfigError(out_of_range(f"walk.schedule[{positions[last_step]}].step", last_step,
                                        f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
+    check_step_changes(body, [p.parameters for p in plans], attrs)
     return plans
