@@ -38,6 +38,8 @@ class PlainShootingSolver:
         self.max_recovery_steps = int(max_recovery_steps)
         self.shots = 0
         self._fallbacks: list = []
+        #: False while the event-free start solves the smooth problem (see :meth:`_solve_free`)
+        self._events_armed = True
 
     # -- forward integration with events --------------------------------------------------------
     def simulate(self, pb: SubphaseProblem, u: np.ndarray):
@@ -53,7 +55,7 @@ class PlainShootingSolver:
         fast = np.asarray(traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, n)),
                                np.tile(pb.context[:, None], (1, n)))).T
         states = np.vstack([pb.x0, fast])
-        start = self._first_sign_change(spec, pb, states, u)
+        start = self._first_sign_change(spec, pb, states, u) if self._events_armed else None
         if start is None:
             return pb.grid.copy(), states, pb.context.copy(), []
         step = interval_function(spec, self.substeps)
@@ -217,6 +219,11 @@ class PlainShootingSolver:
             shots += n
             if np.all(np.isfinite(residual2)) and np.max(np.abs(residual2)) <= self.tolerance:
                 return u2, residual2, shots
+        if pb.spec.events:
+            u3, residual3, n = self._event_free_start(pb, start.copy())
+            shots += n
+            if np.all(np.isfinite(residual3)) and np.max(np.abs(residual3)) <= self.tolerance:
+                return u3, residual3, shots
         offset0 = self._final(pb, start)[0]
         shots += 1
         if not np.all(np.isfinite(offset0)):
@@ -229,6 +236,26 @@ class PlainShootingSolver:
             if not np.all(np.isfinite(residual)):
                 break
         return u, residual, shots
+
+    def _event_free_start(self, pb: SubphaseProblem, u: np.ndarray):
+        """Solve with the events disarmed, then again with them from that root.
+
+        Far from the root a lock event can fire (the stance leg locks at w = l1 before it is
+        vertical), and while it does w(t_step) no longer depends on pa: the map from the unknowns
+        to the final conditions is flat or discontinuous there, and the 1-D and secant solves stall.
+        Without events the same problem is smooth (multiple shooting never integrates events
+        while it iterates either); its root is the answer when no event fires there, and a start
+        next to it otherwise.
+        """
+        self._note("event-free-start")
+        self._events_armed = False
+        try:   # several unknowns: the secant method in several unknowns from the guess; one: 1-D
+            several = sum(not f for f in pb.fixed) > 1
+            u, residual, shots = self._broyden(pb, u) if several else self._sweeps(pb, u, None)
+        finally:
+            self._events_armed = True
+        u, residual, n = self._sweeps(pb, u, None)
+        return u, residual, shots + n
 
     def _sweeps(self, pb: SubphaseProblem, u: np.ndarray, offset):
         """Gauss-Seidel sweeps of 1-D solves over the (unknown, condition) pairs, for the final
