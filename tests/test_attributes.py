@@ -13,7 +13,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs" / "attributes.md"
 
 EXPECTED_DEFAULTS = {
     "sf_max": 182, "sf_min": 30, "speed_min": 0.5, "speed_max": 9.0, "step_length_max_rel": 1.4,
-    "step_length_min_rel": 0.2, "max_speed_change_per_step": 1.0, "max_step_length_change_rel": 0.15,
+    "step_length_min_rel": 0.2, "max_speed_change_per_step": 1.0, "start_speed_max": 5.0, "max_step_length_change_rel": 0.15,
     "parameter_consistency_tolerance": 0.01,
     "swing1_end_fraction": 0.5, "swing2_end_fraction": 0.85, "theta1_torque_off_fraction": 0.4,
     "theta5_impact": 90, "theta6_impact": 0, "heel_off_theta5": 80, "meta_off_theta6": 30,

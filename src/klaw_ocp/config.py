@@ -167,7 +167,8 @@ class ExperimentConfig(BaseModel):
         """Every step of the walk (eq. 1-3), see :func:`klaw_ocp.gait.plan_steps`."""
         schedule = [e.model_dump(exclude_none=True) for e in self.walk.schedule]
         return plan_steps(self.body_model(), self.walk.request(), schedule, n_steps=self.walk.steps,
-                          duration=self.walk.duration, attributes=self.attributes_model())
+                          duration=self.walk.duration, attributes=self.attributes_model(),
+                          start_from_rest=self.walk.start_from_rest)
 
     def output_dir(self) -> Path:
         """``output.dir`` if given, else ``results/<name>`` (relative to the working directory)."""

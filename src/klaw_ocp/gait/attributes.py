@@ -74,6 +74,9 @@ _SPECS = [
     _spec("limits", "max_speed_change_per_step", "km/h", 1.0, 0.05, 3.0,
           "§2.4 principle 1: parameters may change 'with a granularity of one step'; the largest change "
           "of a schedule from one step to the next that the solvers support, " + _OURS),
+    _spec("limits", "start_speed_max", "km/h", 5.0, 0.5, 9.0,
+          "§5, fig. 8: walks that start from standing (at 2 and 5 km/h); the fastest first step of a walk "
+          "from rest, later steps accelerating by max_speed_change_per_step, " + _OURS),
     _spec("limits", "max_step_length_change_rel", "l1", 0.15, 0.01, 0.5,
           "§2.4 principle 1; the largest step-length change from one step to the next, " + _OURS),
     _spec("limits", "parameter_consistency_tolerance", "1", 0.01, 1e-6, 0.2,

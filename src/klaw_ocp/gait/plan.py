@@ -138,9 +138,24 @@ def _parameters_at(i: int, base: LocomotionParameters | None,
     return entries[-1][1]
 
 
+def _start_ramp(i: int, p: LocomotionParameters, body: Body, attrs) -> LocomotionParameters:
+    """Step ``i`` of a walk from rest: no faster than ``start_speed_max + i·max_speed_change_per_step``.
+
+    The first stance carries the body from standing to the step's heel-strike posture: at 9 km/h
+    that is about 5 m/s² of forward acceleration, under which the swing leg trails so far that its
+    toe can only clear the ground with an unnatural hip flexion. People reach a brisk pace over a
+    few steps; so does the plan: a step above the ramp walks eq. 1's natural step at the ramp's speed.
+    """
+    cap = attrs.start_speed_max + i * attrs.max_speed_change_per_step
+    if p.speed_kmh <= cap:
+        return p
+    return complete_parameters(body, speed_kmh=cap, attributes=attrs, field_prefix=f"walk.step[{i}]")
+
+
 def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None = None,
                duration: float | None = None,
-               attributes: LocomotionAttributes | Mapping | None = None) -> list[StepPlan]:
+               attributes: LocomotionAttributes | Mapping | None = None,
+               start_from_rest: bool = False) -> list[StepPlan]:
     """Plan every step of a walk: parameters (eq. 1), timings (eq. 2) and constraints (eq. 3).
 
     Args:
@@ -152,6 +167,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         n_steps: the number of steps (give this or ``duration``).
         duration: the walk's duration in s; steps are added until their t_step sum reaches it.
         attributes: locomotion attributes (defaults if None).
+        start_from_rest: the walk starts standing; its speed then rises from at most
+            ``start_speed_max`` by at most ``max_speed_change_per_step`` a step (:func:`_start_ramp`).
 
     Raises:
         ConfigError: malformed arguments, both or neither of n_steps/duration, a schedule entry
@@ -192,6 +209,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
             raise ConfigError(out_of_range("walk.duration", duration,
                                            f"a duration of at most {MAX_STEPS} steps"))
         p = _parameters_at(i, base, entries, body, attrs)
+        if start_from_rest:
+            p = _start_ramp(i, p, body, attrs)
         timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
         constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x)
         plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))

@@ -55,14 +55,16 @@ def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask:
     z = ca.SX.sym("z", n * nx + n_free)
     x0, tn = ca.SX.sym("x0", nx), ca.SX.sym("t", n + 1)
     c, u_all = ca.SX.sym("c", spec.nc), ca.SX.sym("u_all", spec.nu)
-    params = ca.vertcat(x0, tn, c, u_all)
+    # shift of the final conditions: zero, except along the homotopy of a cold start
+    shift = ca.SX.sym("shift", spec.final.size1_out(0))
+    params = ca.vertcat(x0, tn, c, u_all, shift)
     states = ca.reshape(z[: n * nx], nx, n)
     u = _unknowns(spec, u_all, z[n * nx:], free_mask)
     previous = ca.horzcat(x0, states[:, : n - 1])
     step = interval_function(spec, substeps).map(n)
     propagated = step(previous, tn[:n].T, (tn[1:] - tn[:n]).T, ca.repmat(u, 1, n), ca.repmat(c, 1, n))
     defects = ca.vec(states - propagated)
-    final = spec.final(states[:, n - 1], c)
+    final = spec.final(states[:, n - 1], c) - shift
     all_states = ca.horzcat(x0, states)
     path = None
     if spec.path is not None:
@@ -146,8 +148,9 @@ class MultipleShootingSolver:
         self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
 
     # -- helpers -------------------------------------------------------------------------------
-    def _params(self, pb: SubphaseProblem, u_all) -> np.ndarray:
-        return np.concatenate([pb.x0, pb.grid, pb.context, u_all])
+    def _params(self, pb: SubphaseProblem, u_all, shift=None) -> np.ndarray:
+        shift = np.zeros(pb.spec.final.size1_out(0)) if shift is None else shift
+        return np.concatenate([pb.x0, pb.grid, pb.context, u_all, shift])
 
     def _simulate(self, pb: SubphaseProblem, u: np.ndarray) -> np.ndarray:
         traj = trajectory_function(pb.spec, self.substeps, self.intervals)
@@ -181,7 +184,6 @@ class MultipleShootingSolver:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
                 break
-            call.note("cold-start-newton")
             for damping in (1.0, 0.5, 0.25, 0.125):
                 trial = u.copy(); trial[free] += damping * step
                 xs_trial = self._simulate(pb, trial)
@@ -272,7 +274,38 @@ class MultipleShootingSolver:
             if polished.success:
                 polished.message = "Newton stalled; single-shooting root of the same equations"
                 return polished
+        if not result.success:
+            homotopy = self._homotopy(pb, rf, u0, free_mask, call, result.iterations)
+            if homotopy is not None:
+                return homotopy
         return result
+
+    def _homotopy(self, pb, rf, u0, free_mask, call: _Call, iterations: int, stages: int = 8):
+        """Newton along g(X_N) - (1 - lam) g0 = 0, lam = 1/stages ... 1, from the simulation of
+        the guess (an exact solution at lam = 0: zero defects, final conditions g0).
+
+        A cold start far from the root (the first stance of a 0.5 km/h walk from the all-zero
+        guess: the body falls backwards and the telescope ends metres long) is beyond Newton's
+        reach; every stage of the continuation starts next to its root. The same continuation as
+        plain shooting's homotopy, on the multiple-shooting equations.
+        """
+        spec, n = pb.spec, self.intervals
+        call.note("homotopy")
+        xs = self._simulate(pb, u0)
+        if not np.all(np.isfinite(xs)):
+            return None
+        g0 = np.asarray(spec.final(xs[-1], pb.context)).ravel()
+        z = np.concatenate([xs.ravel(), u0[list(free_mask)]])
+        for lam in np.linspace(1 / stages, 1.0, stages):
+            z = np.asarray(rf(z, self._params(pb, pb.guess, (1 - lam) * g0))).ravel()
+            stats = rf.stats()
+            iterations += int(stats.get("iter_count", stats.get("n_iter", 0)) or 0)
+            if not stats.get("success", True) or not np.all(np.isfinite(z)):
+                return None
+        u = pb.guess.copy()
+        u[list(free_mask)] = z[n * spec.nx:]
+        result = self._finish(pb, z, u, iterations, call, "", True)
+        return result if result.success else None
 
     def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
