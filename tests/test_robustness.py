@@ -81,3 +81,38 @@ def test_the_summary_says_which_subphase_needed_which_fallback(method, fallback)
     assert swing2["path_min"] >= -1e-7
     assert all(isinstance(s["fallbacks"], list) and s["build_s"] >= 0
                for step in summary["steps"] for s in step["subphases"])
+
+
+# schedules at the per-step change limits (1 km/h, 0.15 l1 per step), both directions
+SCHEDULES = [
+    [{"step": 0, "speed": 2.0}, {"step": 3, "speed": 5.0}],
+    [{"step": 0, "speed": 6.0, "step_length": 0.95}, {"step": 3, "speed": 6.0, "step_length": 0.6}],
+]
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("schedule", SCHEDULES, ids=["accelerate", "shorten"])
+def test_schedules_at_the_per_step_limits_converge(method, schedule):
+    walk = simulate_walk(_spec(method, steps=4, schedule=schedule), raise_on_failure=False)
+    assert walk.status == "ok", walk.message
+
+
+DENSE = [(v, h, rest) for v in (0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.0)
+         for h in (1.4, 1.75, 2.1) for rest in (False, True)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("speed, height, rest", DENSE)
+def test_the_dense_envelope_grid_converges(method, speed, height, rest):
+    walk = simulate_walk(_spec(method, height=height, steps=3, speed=speed, start_from_rest=rest,
+                               end_at_rest=rest), raise_on_failure=False)
+    assert walk.status == "ok", walk.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
+def test_a_schedule_across_the_whole_speed_range_converges(method):
+    schedule = [{"step": 0, "speed": 1.0}, {"step": 8, "speed": 9.0}, {"step": 16, "speed": 1.0}]
+    walk = simulate_walk(_spec(method, steps=17, schedule=schedule), raise_on_failure=False)
+    assert walk.status == "ok", walk.message

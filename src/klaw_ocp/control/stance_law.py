@@ -130,3 +130,11 @@ def stance_final_conditions(x, c, at_rest: bool = False):
     n = STANCE_CONTEXT.bind(c)
     conditions = [x[1] - n.theta1_target, x[0] - n.w_target]
     return ca.vertcat(*conditions, x[4]) if at_rest else ca.vertcat(*conditions)
+
+
+def stance_plausible(x, c):
+    """Margins of a physically meaningful stance state (all >= 0): the leg between half and one
+    and a half leg lengths, neither the leg nor the trunk more than 1.2 rad (69 deg) from vertical.
+    Far outside every walk; they only reject spurious roots of the discretised equations."""
+    n = STANCE_CONTEXT.bind(c)
+    return ca.vertcat(x[0] - 0.5 * n.l1, 1.5 * n.l1 - x[0], 1.2 - ca.fabs(x[1]), 1.2 - ca.fabs(x[2]))

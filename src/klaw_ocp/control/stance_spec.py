@@ -30,8 +30,8 @@ from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
 from .stance_law import (PA_KNOTS, STANCE_CONTEXT, STANCE_FORCES, STANCE_PARAMETERS, STANCE_PATH, STANCE_STATE,
-                         hip_height_function, stance_final_conditions, stance_forces, stance_path, stance_rhs,
-                         tracking_residuals)
+                         hip_height_function, stance_final_conditions, stance_forces, stance_path, stance_plausible,
+                         stance_rhs, tracking_residuals)
 
 _LOCKED = STANCE_CONTEXT.index["locked"]
 _L1 = STANCE_CONTEXT.index["l1"]
@@ -116,6 +116,7 @@ def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseS
         residuals=ca.Function("stance_tracking_residuals", args, [tracking_residuals(x, t, p, c)]),
         events=events,
         pairing=pairs,
+        plausible=ca.Function("stance_plausible", [x, c], [stance_plausible(x, c)]),
     )
 
 

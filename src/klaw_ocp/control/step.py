@@ -132,6 +132,8 @@ class StepController:
         names = stance_unknowns(at_rest)
         spec = stance_spec(self.lock_rule, at_rest)
         previous = dict(zip(stance_unknowns(), self._guess("stance", len(stance_unknowns()))))
+        if "stance" not in self.guesses:
+            previous["F_theta1_magnitude"] = self._balancing_torque(inp.x0)
         if not self.tracking:   # the paper's formulation: pa is the monitoring law plus the offset alone
             previous.update({k: 0.0 for k in PA_KNOTS})
         guess = np.array([previous.get(k, 0.0) for k in names])
@@ -141,6 +143,14 @@ class StepController:
                                   state_guess=None if at_rest else self.previous_states.get("stance"))
         # the closing stance has one more unknown: it must not seed the next walk's stances
         return self._solve(index, problem, remember=not at_rest)
+
+    def _balancing_torque(self, x0: np.ndarray) -> float:
+        """A cold start's F_theta1: the torque that holds the stance leg against gravity at heel
+        strike (A.1: b2 = F_theta1 + (m1 r1 + m2 w) g sin theta1). With zero torque instead, a slow
+        walk's body falls backwards from its heel-strike posture and the first stance starts from a
+        trajectory whose telescope ends metres long."""
+        b = self.body
+        return float(-(b.m1 * b.r1 + b.m2 * x0[0]) * b.g * math.sin(x0[1]))
 
     @staticmethod
     def _breakpoints(plan) -> list:

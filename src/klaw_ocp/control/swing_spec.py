@@ -16,6 +16,7 @@ import casadi as ca
 
 from ..solvers.problem import SubphaseSpec
 from . import swing_law as law
+from .stance_law import STANCE_CONTEXT, stance_plausible
 from .stance_spec import stance_lock_events
 
 _NC = len(law.SWING_CONTEXT)
@@ -36,6 +37,8 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_name=None, 
         path_names=(path_name,) if path else (),
         events=stance_lock_events(len(state), len(unknowns), _NC, lock_rule),
         pairing=((0, 0),),
+        # the stance the swing re-simulates (assumption 4) must stay a walk's stance
+        plausible=ca.Function(f"{name}_plausible", [x, c], [stance_plausible(x[:6], c[: len(STANCE_CONTEXT)])]),
     )
 
 

@@ -33,7 +33,8 @@ import casadi as ca
 import numpy as np
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, SubphaseSpec, mapped, path_bounds, path_margin
+from .problem import (SubphaseProblem, SubphaseSolution, SubphaseSpec, mapped, path_bounds, path_margin,
+                      plausibility_margin)
 
 
 def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
@@ -241,8 +242,11 @@ class MultipleShootingSolver:
         defect = float(np.max(np.abs(np.asarray(propagated).T - states[1:])))
         forces = np.asarray(mapped(spec.outputs, n + 1)(states.T, pb.grid, u, pb.context)).T
         path_min = path_margin(pb, states, u)
-        ok = success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9) and np.all(np.isfinite(states))
-        msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}")
+        plausible = plausibility_margin(pb, states) >= 0
+        ok = (success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9)
+              and np.all(np.isfinite(states)) and plausible)
+        msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}"
+                          + ("" if plausible else ", implausible motion (a root far from any walk)"))
         return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
                                 states, forces, max(residual, defect), iterations, bool(ok),
                                 time.perf_counter() - call.wall0 - call.build_s, msg, path_min, nlp=nlp,

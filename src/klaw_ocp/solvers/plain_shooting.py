@@ -21,7 +21,7 @@ import numpy as np
 
 
 from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, mapped, path_margin
+from .problem import SubphaseProblem, SubphaseSolution, mapped, path_margin, plausibility_margin
 
 
 class PlainShootingSolver:
@@ -427,9 +427,11 @@ class PlainShootingSolver:
         forces = np.array([np.asarray(pb.spec.outputs(states[k], times[k], u, c)).ravel()
                            for k in range(len(times))])
         path_min = path_margin(pb, states, u, times)
-        ok = res <= max(10 * self.tolerance, 1e-9) and path_min >= -1e-7
+        plausible = plausibility_margin(pb, states) >= 0
+        ok = res <= max(10 * self.tolerance, 1e-9) and path_min >= -1e-7 and plausible
         msg = "" if ok else (f"residual {res:.3g}" + (f", path constraint violated by {-path_min:.3g}"
-                                                       if path_min < -1e-7 else ""))
+                                                       if path_min < -1e-7 else "")
+                             + ("" if plausible else ", implausible motion (a root far from any walk)"))
         if recovery:
             msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
         return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),

@@ -59,6 +59,9 @@ class SubphaseSpec:
     events: tuple = ()
     #: pairs (unknown index, final-condition index) for the paper's one-unknown-at-a-time shooting
     pairing: tuple = ()
+    #: (x, c) -> margins, all >= 0 on a physically meaningful state: a trajectory that leaves them
+    #: is not a solution, whatever its residual (Newton can converge to a leg metres long)
+    plausible: Optional[ca.Function] = None
 
     @property
     def nx(self) -> int:
@@ -203,3 +206,12 @@ def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=No
         return float("inf")
     values = np.asarray(mapped(pb.spec.path, len(times))(np.asarray(states).T, np.asarray(times), u, pb.context))
     return float(np.min(values.T - lower))
+
+
+def plausibility_margin(pb: SubphaseProblem, states: np.ndarray) -> float:
+    """Smallest plausibility margin over the samples (inf when the spec has no such check)."""
+    if pb.spec.plausible is None:
+        return float("inf")
+    states = np.asarray(states)
+    values = np.asarray(mapped(pb.spec.plausible, len(states))(states.T, pb.context))
+    return float(np.min(values)) if np.all(np.isfinite(values)) else float("-inf")
