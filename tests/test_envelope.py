@@ -1,4 +1,6 @@
 """The supported envelope (gait/envelope.py, docs/envelope.md): refused before any solving."""
+import re
+
 import pytest
 
 from klaw_ocp.cli import main
@@ -50,3 +52,18 @@ def test_cli_refuses_before_solving(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "body.height: got 2.3 m, allowed 1.4 to 2.1 m" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("walk, start", [
+    ({"speed": 2.0, "step_length": 1.0}, "walk.step[0].step_length: got 1 m at 2 km/h and 33.33 steps/min, allowed at most 1.2 x"),
+    ({"speed": 3.0, "step_length": 1.1}, "walk.step[0].step_length: got 1.1 m at 3 km/h and 45.45 steps/min, allowed at most 1.6 x"),
+])
+def test_steps_far_longer_than_natural_are_refused(walk, start):
+    with pytest.raises(GaitLimitError, match="^" + re.escape(start)):
+        ExperimentConfig.from_mapping(_config(**walk))
+
+
+@pytest.mark.parametrize("walk", [{"speed": 5.0, "step_length": 1.05}, {"speed": 5.0, "step_length": 0.5},
+                                  {"speed": 3.0, "step_length": 0.8}])
+def test_the_papers_fig10_steps_are_inside(walk):
+    ExperimentConfig.from_mapping(_config(**walk))

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from ..body import Body
 from ..errors import ConfigError, out_of_range
 from .attributes import LocomotionAttributes, resolve
-from .envelope import check_body, check_step_changes
+from .envelope import check_body, check_step_changes, check_step_length
 from .parameters import LocomotionParameters, complete_parameters
 from .symmetry import StepConstraints, step_constraints
 from .timings import StateTimings, state_phase_timings
@@ -211,6 +211,7 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         p = _parameters_at(i, base, entries, body, attrs)
         if start_from_rest:
             p = _start_ramp(i, p, body, attrs)
+        check_step_length(body, p, i)
         timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
         constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x)
         plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))

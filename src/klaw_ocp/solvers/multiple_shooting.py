@@ -82,7 +82,10 @@ def _rootfinder(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tu
                            [ca.vertcat(tr["defects"], tr["final"])])
     return ca.rootfinder(f"{spec.name}_ms_rf", "newton", residual,
                          {"abstol": tol, "abstolStep": tol * 1e-3, "max_iter": max_iter,
-                          "error_on_fail": False})
+                          "error_on_fail": False,
+                          # a NaN trial step is handled (the solve fails, a fallback follows);
+                          # CasADi's warning for each would only bury the one-line report
+                          "show_eval_warnings": False})
 
 
 @lru_cache(maxsize=None)
@@ -106,7 +109,7 @@ def _ipopt(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_it
     nlp = {"x": tr["z"], "p": p, "f": objective, "g": g}
     opts = {"ipopt.tol": tol, "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter * 10,
             "ipopt.print_level": 0, "print_time": False, "expand": True,
-            "ipopt.sb": "yes", "error_on_fail": False}
+            "ipopt.sb": "yes", "error_on_fail": False, "show_eval_warnings": False}
     if spec.residuals is not None:
         jac = ca.jacobian(residuals, tr["z"])
         lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.numel())
