@@ -67,3 +67,16 @@ def test_steps_far_longer_than_natural_are_refused(walk, start):
                                   {"speed": 3.0, "step_length": 0.8}])
 def test_the_papers_fig10_steps_are_inside(walk):
     ExperimentConfig.from_mapping(_config(**walk))
+
+
+def test_cadences_above_the_supported_ceiling_are_refused():
+    start = "walk.step[0].step_frequency: got 175 steps/min, allowed at most 170 steps/min"
+    with pytest.raises(GaitLimitError, match="^" + re.escape(start)):
+        ExperimentConfig.from_mapping(_config(step_length=0.6, step_frequency=175))
+
+
+def test_a_start_from_rest_ramps_into_the_steps_asked_for():
+    plans = ExperimentConfig.from_mapping(_config(speed=8.5, step_length=1.1, steps=6, start_from_rest=True)).plan()
+    speeds = [p.parameters.speed_kmh for p in plans]
+    assert speeds == pytest.approx([5.0, 6.0, 7.0, 8.0, 8.5, 8.5])
+    assert plans[-1].parameters.step_length_m == pytest.approx(1.1)

@@ -32,6 +32,10 @@ from .parameters import KMH_TO_M_PER_MIN, NORMALIZING_CONSTANT
 #: Body heights (m) and masses (kg) inside which both solver modes are promised to converge.
 SUPPORTED_HEIGHT_M = (1.4, 2.1)
 SUPPORTED_MASS_KG = (40.0, 150.0)
+#: The highest step frequency supported (steps/min): eq. 2's double support is then 13 ms long.
+#: Measured: at 175 plain shooting fails some swing2s, at 180 (1 ms of double support) every
+#: walk fails. The paper's anatomical limit sf_max = 182 is where the double support vanishes.
+SUPPORTED_SF_MAX = 170.0
 #: The longest step supported, as a multiple of eq. 1's natural step at the same speed.
 NATURAL_STEP_RATIO_MAX = 1.6
 #: Below this step frequency (steps/min) only near-natural steps are supported ...
@@ -70,9 +74,15 @@ def check_step_changes(body: Body, parameters: list, attrs) -> None:
 
 
 def check_step_length(body: Body, parameters, index: int) -> None:
-    """Raise GaitLimitError if step ``index`` is longer than the envelope allows for its speed."""
+    """Raise GaitLimitError if step ``index`` is faster in cadence, or longer for its speed, than
+    the envelope allows."""
     v = parameters.speed_kmh * KMH_TO_M_PER_MIN
     natural = math.sqrt(NORMALIZING_CONSTANT * body.height * v)
+    if parameters.step_frequency_spm > SUPPORTED_SF_MAX * (1 + 1e-9):
+        raise GaitLimitError(
+            f"walk.step[{index}].step_frequency: got {parameters.step_frequency_spm:.4g} steps/min, allowed at most "
+            f"{SUPPORTED_SF_MAX:g} steps/min (the walks the solvers support, docs/envelope.md: the double support "
+            f"of eq. 2 is shorter than 13 ms above it)")
     slow = parameters.step_frequency_spm < SLOW_CADENCE_SPM
     ratio_max = SLOW_CADENCE_RATIO_MAX if slow else NATURAL_STEP_RATIO_MAX
     if parameters.step_length_m > ratio_max * natural * (1 + 1e-9):

@@ -144,12 +144,15 @@ def _start_ramp(i: int, p: LocomotionParameters, body: Body, attrs) -> Locomotio
     The first stance carries the body from standing to the step's heel-strike posture: at 9 km/h
     that is about 5 m/s² of forward acceleration, under which the swing leg trails so far that its
     toe can only clear the ground with an unnatural hip flexion. People reach a brisk pace over a
-    few steps; so does the plan: a step above the ramp walks eq. 1's natural step at the ramp's speed.
+    few steps; so does the plan. A step above the ramp keeps its ratio to eq. 1's natural step
+    (which grows with the square root of the speed), so the ramp runs smoothly into the steps asked for.
     """
     cap = attrs.start_speed_max + i * attrs.max_speed_change_per_step
     if p.speed_kmh <= cap:
         return p
-    return complete_parameters(body, speed_kmh=cap, attributes=attrs, field_prefix=f"walk.step[{i}]")
+    step_length = p.step_length_m * math.sqrt(cap / p.speed_kmh)
+    return complete_parameters(body, speed_kmh=cap, step_length=step_length, attributes=attrs,
+                               field_prefix=f"walk.step[{i}]")
 
 
 def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None = None,
