@@ -214,8 +214,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         p = _parameters_at(i, base, entries, body, attrs)
         if start_from_rest:
             p = _start_ramp(i, p, body, attrs)
-        check_step_length(body, p, i)
         timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
+        check_step_length(body, p, i)
         constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x)
         plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))
         t += timings.t_step
