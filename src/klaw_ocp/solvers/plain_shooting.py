@@ -6,12 +6,13 @@ with one final condition (``spec.pairing``: F_theta1 with theta1, pa with w, ...
 that is the paper's method as written; with two, the 1-D solves alternate (Gauss-Seidel sweeps)
 until both conditions hold, because the paper does not say how it coupled them.
 
-Forward integration uses the same RK4 interval as multiple shooting, node by node, and watches
-the spec's events (the stance leg's lock and unlock): a sign change inside an interval is located
-by the secant method on the partial interval, the event's switch is applied there and the
-integration goes on. The recovery loop of swing2 is ``recovery_step``: while a path inequality
-(toe clearance) is violated, the unknown it names is raised by one increment and the free
-unknowns are solved again.
+Forward integration uses the same RK4 interval as multiple shooting and watches the spec's
+events (the stance leg's lock and unlock; :mod:`.events`). The recovery loop of swing2 is
+``recovery_step``: while a path inequality (toe clearance) is violated, the unknown it names is
+raised by increments and the free unknowns are solved again; the smallest sufficient number of
+increments is found by doubling then bisection (:meth:`PlainShootingSolver._recover`). The
+fallbacks beyond the paper's method (Broyden, the event-free start, the homotopy) are listed in
+docs/solvers.md and reported in each solution's ``fallbacks``.
 """
 from __future__ import annotations
 
@@ -20,8 +21,8 @@ import time
 import numpy as np
 
 
-from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, SubphaseSolution, mapped, path_margin, plausibility_margin
+from .events import EventIntegrator
+from .problem import SubphaseProblem, SubphaseSolution, path_margin, plausibility_margin
 
 
 class PlainShootingSolver:
@@ -37,97 +38,17 @@ class PlainShootingSolver:
         self.bisection_steps, self.max_sweeps = int(bisection_steps), int(max_sweeps)
         self.max_recovery_steps = int(max_recovery_steps)
         self.shots = 0
+        self._integrator = EventIntegrator(self.substeps)
         self._fallbacks: list = []
         #: False while the event-free start solves the smooth problem (see :meth:`_solve_free`)
         self._events_armed = True
 
-    # -- forward integration with events --------------------------------------------------------
+    # -- forward integration ----------------------------------------------------------------
     def simulate(self, pb: SubphaseProblem, u: np.ndarray):
-        """Integrate from x0 with parameters u; returns (times, states, context, event log).
-
-        The whole grid is first integrated in one call; only if an armed event changes sign on it
-        does the integration go on node by node from the interval before that change.
-        """
-        spec = pb.spec
+        """Integrate from x0 with parameters u (:class:`.events.EventIntegrator`); returns (times,
+        states, context, event log). The events are disarmed during the event-free start."""
         self.shots += 1
-        n = pb.grid.size - 1
-        traj = trajectory_function(spec, self.substeps, n)
-        fast = np.asarray(traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, n)),
-                               np.tile(pb.context[:, None], (1, n)))).T
-        states = np.vstack([pb.x0, fast])
-        start = self._first_sign_change(spec, pb, states, u) if self._events_armed else None
-        if start is None:
-            return pb.grid.copy(), states, pb.context.copy(), []
-        step = interval_function(spec, self.substeps)
-        c, mode = pb.context.copy(), {}
-        x = states[start].copy()
-        times, out, log = list(pb.grid[: start + 1]), list(states[: start + 1]), []
-        for k in range(start, n):
-            t0, t1 = pb.grid[k], pb.grid[k + 1]
-            while True:
-                x1 = np.asarray(step(x, t0, t1 - t0, u, c)).ravel()
-                hit = self._first_event(spec, pb, x, t0, x1, t1, u, c, mode)
-                if hit is None:
-                    break
-                event, h = hit
-                x = np.asarray(step(x, t0, h, u, c)).ravel()
-                t0 = t0 + h
-                x, c, mode = event.apply(x, c, mode)
-                times.append(t0)
-                out.append(x.copy())
-                log.append((event.name, float(t0)))
-            x = x1
-            times.append(t1)
-            out.append(x.copy())
-            if not np.all(np.isfinite(x)):
-                break
-        return np.array(times), np.array(out), c, log
-
-    def _first_sign_change(self, spec, pb, states, u):
-        """Index of the first interval on which an event armed in the initial mode fires."""
-        first = None
-        for event in spec.events:
-            values = np.asarray(mapped(event.fn, len(states))(
-                states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
-                np.tile(pb.context[:, None], (1, len(states))))).ravel()
-            d = event.direction
-            for k in range(len(states) - 1):
-                if first is not None and k >= first:
-                    break
-                if values[k] * d < 0 <= values[k + 1] * d and event.guard(states[k], pb.grid[k], pb.context, {}):
-                    first = k
-                    break
-        return first
-
-    def _first_event(self, spec, pb, x0, t0, x1, t1, u, c, mode):
-        best = None
-        for event in spec.events:
-            if not event.guard(x0, t0, c, mode):
-                continue
-            g0 = float(event.fn(x0, t0, u, c))
-            g1 = float(event.fn(x1, t1, u, c))
-            if not (g0 * event.direction < 0 <= g1 * event.direction):
-                continue
-            h = self._locate(spec, event, x0, t0, t1 - t0, g0, g1, u, c)
-            if best is None or h < best[1]:
-                best = (event, h)
-        return best
-
-    def _locate(self, spec, event, x0, t0, h, g0, g1, u, c):
-        step = interval_function(spec, self.substeps)
-        a, b, ga, gb = 0.0, h, g0, g1
-        for _ in range(60):
-            m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
-            if not a < m < b:
-                m = 0.5 * (a + b)
-            gm = float(event.fn(step(x0, t0, m, u, c), t0 + m, u, c))
-            if abs(gm) < 1e-13 or b - a < 1e-14:
-                return m
-            if gm * ga < 0:
-                b, gb = m, gm
-            else:
-                a, ga = m, gm
-        return 0.5 * (a + b)
+        return self._integrator.simulate(pb, u, armed=self._events_armed)
 
     def _final(self, pb, u):
         times, states, c, log = self.simulate(pb, u)
