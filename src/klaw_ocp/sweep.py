@@ -16,6 +16,7 @@ names the failing step, subphase and residual; any other exception gives ``statu
 and its one-line message. :func:`write_sweep` writes ``sweep.csv`` (columns:
 :data:`RESULT_COLUMNS` after one column per varied path) and the map ``sweep.png``
 (:mod:`klaw_ocp.io.sweep_plot`). docs/sweep.md has the user's view.
+The `--vary` values are parsed by :mod:`klaw_ocp.sweep_values`.
 """
 from __future__ import annotations
 
@@ -23,7 +24,6 @@ import copy
 import itertools
 import math
 import os
-import re
 import sys
 import threading
 import time
@@ -33,103 +33,16 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, ConvergenceError, KlawError, out_of_range
+from .sweep_values import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
+                           combination_label, format_value, parse_values, parse_vary)
 
 METHODS = ("multiple-shooting", "plain-shooting")
-#: The largest sweep accepted (walks, counting each method separately).
-MAX_WALKS = 10_000
-#: A range includes its stop when (stop - start) / step is this close (relative) to an integer.
-RANGE_REL_TOL = 1e-9
-#: Range values are rounded to this many significant digits (0.1:0.3:0.1 gives 0.3, not 0.30000000000000004).
-RANGE_DIGITS = 12
 FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 #: The columns of a row after the varied paths, in CSV order.
 RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
                   "wall_s", "build_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", *(f"peak_{c}" for c in FORCE_COLUMNS),
                   "fallbacks", "message")
 STATUSES = ("ok", "failed", "error")
-
-_PATH = re.compile(r"^[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*$")
-_VARY_ALLOWED = ("PATH=VALUES with PATH a dotted config path (walk.speed) and VALUES a comma list of "
-                 "YAML scalars (1,3,5 or true,false) or ranges start:stop:step with step > 0 (0.5:8:0.5)")
-
-
-# ------------------------------------------------------------------------------ --vary parsing
-
-def parse_vary(text: str) -> tuple[str, list]:
-    """``"walk.speed=1,3,5"`` -> ``("walk.speed", [1, 3, 5])``; one-line ConfigError otherwise."""
-    path, sep, values = str(text).partition("=")
-    path = path.strip()
-    if not sep or not _PATH.match(path):
-        raise ConfigError(out_of_range("--vary", text, _VARY_ALLOWED))
-    return path, parse_values(values, path)
-
-
-def parse_values(text: str, path: str = "PATH") -> list:
-    """A comma list whose items are YAML scalars or inclusive ranges ``start:stop:step``."""
-    items = [item.strip() for item in str(text).split(",")]
-    if not all(items):
-        raise ConfigError(f"--vary {path}: got {text!r} (an empty value), allowed {_VARY_ALLOWED}")
-    values: list = []
-    for item in items:
-        values += _parse_range(item, path) if ":" in item else [_parse_scalar(item, path)]
-        if len(values) > MAX_WALKS:
-            raise ConfigError(f"--vary {path}: got more than {MAX_WALKS} values, allowed at most {MAX_WALKS} walks")
-    return values
-
-
-def _parse_scalar(item: str, path: str):
-    try:
-        value = yaml.safe_load(item)
-    except yaml.YAMLError:
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}") from None
-    if isinstance(value, str):  # YAML 1.1 reads 1e-3 as a string; a number is meant
-        try:
-            return float(value)
-        except ValueError:
-            return value
-    if isinstance(value, (list, dict)):
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}")
-    return value
-
-
-def _parse_range(item: str, path: str) -> list:
-    """``start:stop:step``; stop is included when it lies on the grid to within RANGE_REL_TOL."""
-    parts = item.split(":")
-    try:
-        if len(parts) != 3:
-            raise ValueError
-        start, stop, step = (int(p) if re.fullmatch(r"\s*[-+]?\d+\s*", p) else float(p) for p in parts)
-    except ValueError:
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed a range start:stop:step of numbers "
-                          f"(0.5:8:0.5)") from None
-    if not all(math.isfinite(x) for x in (start, stop, step)) or step <= 0:
-        raise ConfigError(f"--vary {path}: got range {item!r}, allowed finite numbers with step > 0")
-    span = (stop - start) / step
-    whole = round(span)
-    count = (whole if abs(span - whole) <= RANGE_REL_TOL * max(1.0, abs(span)) else math.floor(span)) + 1
-    if count < 1:
-        raise ConfigError(f"--vary {path}: got range {item!r}, which yields no value, allowed start <= stop")
-    if count > MAX_WALKS:
-        raise ConfigError(f"--vary {path}: got range {item!r} with {count} values, allowed at most {MAX_WALKS} walks")
-    if all(isinstance(x, int) for x in (start, stop, step)):
-        return [start + i * step for i in range(count)]
-    # RANGE_DIGITS significant digits of the range's scale: 0.30000000000000004 -> 0.3, 5.6e-17 -> 0
-    digits = RANGE_DIGITS - 1 - math.floor(math.log10(max(abs(start), abs(stop), step)))
-    return [round(start + i * step, digits) + 0.0 for i in range(count)]
-
-
-def format_value(value) -> str:
-    """A varied value as written on the command line (YAML style: true, null, 0.5)."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(value) if isinstance(value, float) else str(value)
-
-
-def combination_label(values: dict) -> str:
-    return ", ".join(f"{path}={format_value(v)}" for path, v in values.items())
-
 
 # ---------------------------------------------------------------------------- grid, validation
 
