@@ -175,6 +175,13 @@ class ExperimentConfig(BaseModel):
         return Path(self.output.dir) if self.output.dir else Path("results") / self.name
 
 
+def check_stance_method(stance: str, method: str, prefix: str = "") -> None:
+    """The tracking stance is an optimal control problem: refuse it with plain shooting (one line)."""
+    if stance == "tracking" and method != "multiple-shooting":
+        raise ConfigError(f"{prefix}solver.stance: got 'tracking' with method {method!r}, allowed 'monitored' "
+                          "(the tracking stance is an optimal control problem; use method multiple-shooting)")
+
+
 def load_config(path) -> ExperimentConfig:
     """Read and validate an experiment YAML file; raise one-line ConfigError on any problem."""
     path = Path(path)

@@ -104,7 +104,7 @@ def expand(config, vary: dict, methods=None) -> tuple[str, list[dict]]:
     is None (each combination's solver.method), a method, "both", or a sequence of methods.
     Raises the combination's one-line ConfigError/GaitLimitError, prefixed by the combination.
     """
-    from .config import ExperimentConfig
+    from .config import ExperimentConfig, check_stance_method
 
     base, vary, chosen = read_mapping(config), _check_vary(vary), _methods(methods)
     paths = list(vary)
@@ -124,9 +124,7 @@ def expand(config, vary: dict, methods=None) -> tuple[str, list[dict]]:
             raise _prefixed(exc, label) from None
         name = name or cfg.name
         for method in chosen or (cfg.solver.method,):
-            if cfg.solver.stance == "tracking" and method != "multiple-shooting":  # as simulate_walk
-                raise ConfigError(f"{label}: solver.stance: got 'tracking' with method {method!r}, allowed "
-                                  f"'monitored' (the tracking stance needs method multiple-shooting)")
+            check_stance_method(cfg.solver.stance, method, prefix=f"{label}: ")
             tasks.append({"values": values, "mapping": mapping, "method": method})
     return name, tasks
 

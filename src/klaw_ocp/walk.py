@@ -27,7 +27,7 @@ from .body import Body
 from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
 from .dynamics import heel_strike_map, stance_hip
-from .errors import ConfigError, ConvergenceError
+from .errors import ConvergenceError
 from .solvers import make_solver
 
 
@@ -133,9 +133,8 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
         spec = walk_spec(config, method)
     elif method is not None:
         spec = replace(spec, method=method)
-    if spec.stance == "tracking" and spec.method != "multiple-shooting":
-        raise ConfigError(f"solver.stance: got 'tracking' with method {spec.method!r}, allowed 'monitored' "
-                          "(the tracking stance is an optimal control problem; use method multiple-shooting)")
+    from .config import check_stance_method
+    check_stance_method(spec.stance, spec.method)
     wall0 = time.perf_counter()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)

@@ -23,11 +23,9 @@ is refused with a one-line :class:`~klaw_ocp.errors.GaitLimitError` before anyth
 """
 from __future__ import annotations
 
-import math
-
 from ..body import Body
 from ..errors import GaitLimitError
-from .parameters import KMH_TO_M_PER_MIN, NORMALIZING_CONSTANT
+from .parameters import KMH_TO_M_PER_MIN, natural_step_length
 
 #: Body heights (m) and masses (kg) inside which both solver modes are promised to converge.
 SUPPORTED_HEIGHT_M = (1.4, 2.1)
@@ -76,8 +74,7 @@ def check_step_changes(body: Body, parameters: list, attrs) -> None:
 def check_step_length(body: Body, parameters, index: int) -> None:
     """Raise GaitLimitError if step ``index`` is faster in cadence, or longer for its speed, than
     the envelope allows."""
-    v = parameters.speed_kmh * KMH_TO_M_PER_MIN
-    natural = math.sqrt(NORMALIZING_CONSTANT * body.height * v)
+    natural = natural_step_length(body.height, parameters.speed_kmh * KMH_TO_M_PER_MIN)
     if parameters.step_frequency_spm > SUPPORTED_SF_MAX * (1 + 1e-9):
         raise GaitLimitError(
             f"walk.step[{index}].step_frequency: got {parameters.step_frequency_spm:.4g} steps/min, allowed at most "

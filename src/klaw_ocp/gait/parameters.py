@@ -69,6 +69,11 @@ def _positive(field: str, value, unit: str) -> float | None:
     return value
 
 
+def natural_step_length(height_m: float, speed_m_per_min: float) -> float:
+    """Eq. 1's natural step length (m) at a speed (m/min): sl = v / sf with sf² = v / (0.004 · H)."""
+    return math.sqrt(NORMALIZING_CONSTANT * height_m * speed_m_per_min)
+
+
 def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequency=None,
                         attributes: LocomotionAttributes | None = None, *,
                         field_prefix: str = "walk") -> LocomotionParameters:
@@ -120,8 +125,8 @@ def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequ
     elif sl is not None and sf is not None:
         v = sl * sf
     elif v is not None:
-        sf = math.sqrt(v / (NORMALIZING_CONSTANT * h))  # eq. 1, right-hand form
-        sl = v / sf
+        sl = natural_step_length(h, v)  # eq. 1, right-hand form
+        sf = v / sl
     elif sl is not None:
         sf = sl / (NORMALIZING_CONSTANT * h)
         v = sl * sf

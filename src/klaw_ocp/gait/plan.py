@@ -30,7 +30,7 @@ from ..body import Body
 from ..errors import ConfigError, out_of_range
 from .attributes import LocomotionAttributes, resolve
 from .envelope import check_body, check_step_changes, check_step_length
-from .parameters import LocomotionParameters, complete_parameters
+from .parameters import KMH_TO_M_PER_MIN, LocomotionParameters, complete_parameters, natural_step_length
 from .symmetry import StepConstraints, step_constraints
 from .timings import StateTimings, state_phase_timings
 
@@ -150,7 +150,8 @@ def _start_ramp(i: int, p: LocomotionParameters, body: Body, attrs) -> Locomotio
     cap = attrs.start_speed_max + i * attrs.max_speed_change_per_step
     if p.speed_kmh <= cap:
         return p
-    step_length = p.step_length_m * math.sqrt(cap / p.speed_kmh)
+    natural = lambda kmh: natural_step_length(body.height, kmh * KMH_TO_M_PER_MIN)  # noqa: E731
+    step_length = p.step_length_m * natural(cap) / natural(p.speed_kmh)
     return complete_parameters(body, speed_kmh=cap, step_length=step_length, attributes=attrs,
                                field_prefix=f"walk.step[{i}]")
 

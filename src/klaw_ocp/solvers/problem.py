@@ -140,8 +140,8 @@ class SubphaseSolution:
     #: which algorithm produced it: "rootfinder", "ipopt" or "bisection-secant"
     nlp: str = ""
     #: the fallbacks this solve needed beyond the mode's plain method, in order (docs/solvers.md):
-    #: "bracket", "single-shooting-root", "ipopt-repair" (multiple shooting); "swapped-pairing",
-    #: "broyden", "event-free-start", "homotopy", "recovery-loop" (plain shooting)
+    #: "bracket", "single-shooting-root", "homotopy", "ipopt-repair" (multiple shooting);
+    #: "swapped-pairing", "broyden", "event-free-start", "homotopy", "recovery-loop" (plain shooting)
     fallbacks: list = field(default_factory=list)
     #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
     build_s: float = 0.0
