@@ -8,6 +8,7 @@ and a partial interval (an event inside it) is the same call with a shorter ``h`
 """
 from __future__ import annotations
 
+import sys
 from functools import lru_cache
 
 import casadi as ca
@@ -38,3 +39,111 @@ def trajectory_function(spec: SubphaseSpec, substeps: int, intervals: int) -> ca
     """``(x0, t[N], h[N], u, c) -> X[nx, N]``: the states at nodes 1..N, one call per shot."""
     step = interval_function(spec, substeps)
     return step.mapaccum(f"{spec.name}_traj_{substeps}_{intervals}", intervals, ["x"], ["xf"])
+
+
+class SubphaseKernels:
+    """The compiled numeric core of one subphase on a grid of ``intervals`` intervals.
+
+    Each kernel is a flat-array callable (:mod:`.kernels`); matrices come back column-major, so
+    an (nx, N) output reshapes to (N, nx). Built once per (spec, substeps, intervals):
+
+    - ``sim(x0, t[N], h[N], u, c) -> X[nx, N]``: the states at nodes 1..N, one forward shot;
+    - ``prop(X[nx, N], t, h, u, c) -> Xf[nx, N]``: each interval from its own start state;
+    - ``sens(X, t, h, u, c) -> Xf, J[nx, (nx + nu) N]``: the same with each interval's Jacobian
+      d xf / d(x, u), the blocks of multiple shooting's Jacobian (forward AD of the RK4 interval);
+    - ``step(x, t, h, u, c) -> xf``: one interval of any length (events, partial intervals);
+    - ``final(x, c) -> g, G``: the final conditions and their Jacobian;
+    - ``nodes(X[nx, N+1], t[N+1], u, c) -> forces, path, plausible``: what is reported and
+      checked at the nodes (empty outputs when the spec has no path or plausibility functions);
+    - ``events(x, t, u, c) -> values``: the event functions at one state.
+    """
+
+    NAMES = ("sim", "prop", "sens", "step", "final", "nodes", "events")
+
+    def __init__(self, spec: SubphaseSpec, substeps: int, intervals: int):
+        from .kernels import KernelLibrary, source_key
+        self.spec, self.substeps, self.intervals = spec, int(substeps), int(intervals)
+        parts = [source_key(sys.modules[__name__]), spec.name, spec.nx, spec.nu, spec.nc, self.substeps, self.intervals]
+        for fn in (spec.rhs, spec.final, spec.outputs, spec.path, spec.plausible, *(e.fn for e in spec.events)):
+            parts.append(fn.serialize() if fn is not None else "-")
+        self.library = KernelLibrary(parts, [f"{spec.name}_{n}" for n in self.NAMES], self._build)
+        self._fns = None
+
+    def __getattr__(self, name):
+        if name in SubphaseKernels.NAMES:
+            if self._fns is None:
+                self._fns = self.library.functions()
+            return self._fns[f"{self.spec.name}_{name}"]
+        raise AttributeError(name)
+
+    def _build(self, compiling: bool) -> list:
+        spec, n = self.spec, self.intervals
+        nx, nu, nc = spec.nx, spec.nu, spec.nc
+        step, sens = rk4_interval(spec, self.substeps, False), rk4_interval(spec, self.substeps, True)
+        if not compiling:   # CasADi's virtual machine is fastest on one flat SX graph per interval
+            step, sens = step.expand(), sens.expand()
+        mx = lambda name, rows=1, cols=1: ca.MX.sym(name, rows, cols)
+        X, T, H, U, C = mx("X", nx, n), mx("t", 1, n), mx("h", 1, n), mx("u", nu), mx("c", nc)
+        x0, x, t, h = mx("x0", nx), mx("x", nx), mx("t"), mx("h")
+        rep = lambda v, k: ca.repmat(v, 1, k)
+        name = lambda kind: f"{spec.name}_{kind}"
+        traj = step.mapaccum(f"{spec.name}_accum", n)
+        fns = [ca.Function(name("sim"), [x0, T, H, U, C], [traj(x0, T, H, rep(U, n), rep(C, n))]),
+               ca.Function(name("prop"), [X, T, H, U, C], [step.map(n)(X, T, H, rep(U, n), rep(C, n))])]
+        xf_all, j_all = sens.map(n)(X, T, H, rep(U, n), rep(C, n))
+        fns.append(ca.Function(name("sens"), [X, T, H, U, C], [xf_all, j_all]))
+        fns.append(ca.Function(name("step"), [x, t, h, U, C], [step(x, t, h, U, C)]))
+        xs, cs = ca.SX.sym("x", nx), ca.SX.sym("c", nc)
+        g = spec.final(xs, cs)
+        fns.append(ca.Function(name("final"), [xs, cs], [g, ca.densify(ca.jacobian(g, xs))]))
+        Xn, Tn = mx("X", nx, n + 1), mx("t", 1, n + 1)
+        per_node = lambda fn, *args: fn.map(n + 1)(*args) if fn is not None else ca.MX(0, n + 1)
+        fns.append(ca.Function(name("nodes"), [Xn, Tn, U, C], [
+            per_node(spec.outputs, Xn, Tn, rep(U, n + 1), rep(C, n + 1)),
+            per_node(spec.path, Xn, Tn, rep(U, n + 1), rep(C, n + 1)),
+            per_node(spec.plausible, Xn, rep(C, n + 1))]))
+        events = [e.fn(x, t, U, C) for e in spec.events]
+        fns.append(ca.Function(name("events"), [x, t, U, C], [ca.vertcat(*events) if events else ca.MX(0, 1)]))
+        return fns
+
+
+def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.Function:
+    """The RK4 interval as calls of the right-hand side (compact compiled code); with
+    ``sensitivities`` also J = d xf / d(x, u), propagated through the same RK4 stages (the
+    variational equations discretised exactly as forward AD of the interval would: same numbers,
+    but the generated code holds one Jacobian of the right-hand side instead of one of the whole
+    interval, a twentieth of the size)."""
+    nx, nu = spec.nx, spec.nu
+    xs, ts, us, cs = ca.SX.sym("x", nx), ca.SX.sym("t"), ca.SX.sym("u", nu), ca.SX.sym("c", spec.nc)
+    f = spec.rhs(xs, ts, us, cs)
+    rhs_jac = ca.Function(f"{spec.name}_rhs_jac", [xs, ts, us, cs], [f, ca.densify(ca.jacobian(f, ca.vertcat(xs, us)))])
+    x, t, h = ca.MX.sym("x", nx), ca.MX.sym("t"), ca.MX.sym("h")
+    u, c = ca.MX.sym("u", nu), ca.MX.sym("c", spec.nc)
+    dt = h / substeps
+    seed_u = ca.MX.zeros(nx, nx)
+    S = ca.MX.eye(nx + nu)[:nx, :] if sensitivities else None
+
+    def stage(xk, tk, Sk):
+        if not sensitivities:
+            return spec.rhs(xk, tk, u, c), None
+        k, jac = rhs_jac(xk, tk, u, c)
+        return k, ca.mtimes(jac[:, :nx], Sk) + ca.horzcat(seed_u, jac[:, nx:])
+
+    xk, tk = x, t
+    for _ in range(substeps):
+        k1, d1 = stage(xk, tk, S)
+        k2, d2 = stage(xk + dt / 2 * k1, tk + dt / 2, S + dt / 2 * d1 if sensitivities else None)
+        k3, d3 = stage(xk + dt / 2 * k2, tk + dt / 2, S + dt / 2 * d2 if sensitivities else None)
+        k4, d4 = stage(xk + dt * k3, tk + dt, S + dt * d3 if sensitivities else None)
+        xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if sensitivities:
+            S = S + dt / 6 * (d1 + 2 * d2 + 2 * d3 + d4)
+        tk = tk + dt
+    outputs = [xk, S] if sensitivities else [xk]
+    return ca.Function(f"{spec.name}_rk4_{substeps}{'_sens' if sensitivities else ''}", [x, t, h, u, c], outputs)
+
+
+@lru_cache(maxsize=None)
+def subphase_kernels(spec: SubphaseSpec, substeps: int, intervals: int) -> SubphaseKernels:
+    """The kernels of a spec on N intervals, built or loaded once per process."""
+    return SubphaseKernels(spec, substeps, intervals)

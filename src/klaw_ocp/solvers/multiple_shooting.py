@@ -1,25 +1,24 @@
-"""Mode (a): CasADi multiple shooting, solved by ``rootfinder`` (square) or IPOPT (inequalities).
+"""Mode (a): CasADi multiple shooting: Newton on the square system, IPOPT with inequalities.
 
-Decision vector, for N intervals and a spec with nx states and nu free parameters:
+Unknowns, for N intervals and a spec with nx states and nu free parameters: the node states
+X_1..X_N (X_0 = x0 is given) and the free parameters. Equations: the continuity defects
+``X_{k+1} - Phi(X_k, t_k, h_k, u, c)`` for k = 0..N-1 and the final conditions ``g(X_N, c)``;
+Phi is the shared RK4 interval (:mod:`.integrator`). Everything that changes from step to step
+(x0, the grid, the context c, the fixed unknowns) is a parameter, so the compiled functions of
+each spec are built once per machine (:mod:`.kernels`) and reused with new numbers.
 
-    z = [X_1, ..., X_N, u_free]        (X_k in R^nx are the node states; X_0 = x0 is a parameter)
-
-Equations: the continuity defects ``X_{k+1} - Phi(X_k, t_k, h_k, u, c)`` for k = 0..N-1 and the
-final conditions ``g(X_N, c)``; Phi is the shared RK4 interval (:mod:`.integrator`). The parameter
-vector ``P = [x0, t_0..t_N, c, u_all]`` carries everything that changes from step to step, so each
-solver is built once per (spec, N, substeps, set of free unknowns) and reused with new P.
-
-- Square problems (as many free unknowns as final conditions) go to ``rootfinder('newton')``.
-- Problems with path inequalities ``h(X_k, t_k, u, c) >= lower_k`` go to IPOPT: the unknowns held
-  fixed in the square problem (e.g. the swing2 hip position actuator) become free, and the
-  objective keeps them as close as possible to their nominal values. This is the OCP form of the
-  paper's recovery loop: instead of raising the actuator in increments until the toe clears, it
-  finds the smallest change that makes it clear.
+- Square problems (as many free unknowns as final conditions) are solved by Newton's method on
+  the multiple-shooting system, exploiting its block structure: per-interval Jacobians from one
+  compiled call, condensed to a system the size of u, and chord steps that reuse the last
+  Jacobian while the residual contracts (:mod:`.newton`). ``nlp: rootfinder`` names this solver.
+- Problems with path inequalities ``h(X_k, t_k, u, c) >= lower_k`` go to IPOPT (:mod:`.ipopt_nlp`):
+  the unknowns held fixed in the square problem (e.g. the swing2 hip position actuator) become
+  free, and the objective keeps them as close as possible to their nominal values. This is the
+  OCP form of the paper's recovery loop: instead of raising the actuator in increments until the
+  toe clears, it finds the smallest change that makes it clear.
 - A spec with least-squares residuals (the stance's hip-height tracking) is optimised instead:
   the objective is the mean of their squares over the nodes, every unknown is free (pa over the
-  grid), and IPOPT gets the Gauss-Newton Hessian 2 J^T J of the residuals: the exact Hessian of
-  the Lagrangian costs 80 ms per evaluation here (second derivatives through 80 RK4 stages),
-  while the constraint curvature it adds buys few iterations near a small-residual optimum.
+  grid), and IPOPT gets the Gauss-Newton Hessian 2 J^T J of the residuals.
 - Bounds that depend on the motion (the stance lock rule applies while theta1 < 0) are evaluated
   on the starting trajectory, then on each solution, and the NLP is re-solved from the last
   solution until the set of active nodes no longer changes.
@@ -27,96 +26,13 @@ solver is built once per (spec, N, substeps, set of free unknowns) and reused wi
 from __future__ import annotations
 
 import time
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
-from .integrator import interval_function, trajectory_function
-from .problem import (SubphaseProblem, SubphaseSolution, SubphaseSpec, mapped, path_bounds, path_margin,
-                      plausibility_margin)
-
-
-def _unknowns(spec: SubphaseSpec, u_all: ca.SX, u_free: ca.SX, free_mask: tuple) -> ca.SX:
-    parts, j = [], 0
-    for i, free in enumerate(free_mask):
-        if free:
-            parts.append(u_free[j])
-            j += 1
-        else:
-            parts.append(u_all[i])
-    return ca.vertcat(*parts)
-
-
-@lru_cache(maxsize=None)
-def _transcription(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tuple):
-    """Symbols and expressions of the multiple-shooting transcription (built once)."""
-    n, nx = intervals, spec.nx
-    n_free = sum(free_mask)
-    z = ca.SX.sym("z", n * nx + n_free)
-    x0, tn = ca.SX.sym("x0", nx), ca.SX.sym("t", n + 1)
-    c, u_all = ca.SX.sym("c", spec.nc), ca.SX.sym("u_all", spec.nu)
-    # shift of the final conditions: zero, except along the homotopy of a cold start
-    shift = ca.SX.sym("shift", spec.final.size1_out(0))
-    params = ca.vertcat(x0, tn, c, u_all, shift)
-    states = ca.reshape(z[: n * nx], nx, n)
-    u = _unknowns(spec, u_all, z[n * nx:], free_mask)
-    previous = ca.horzcat(x0, states[:, : n - 1])
-    step = interval_function(spec, substeps).map(n)
-    propagated = step(previous, tn[:n].T, (tn[1:] - tn[:n]).T, ca.repmat(u, 1, n), ca.repmat(c, 1, n))
-    defects = ca.vec(states - propagated)
-    final = spec.final(states[:, n - 1], c) - shift
-    all_states = ca.horzcat(x0, states)
-    path = None
-    if spec.path is not None:
-        path_map = spec.path.map(n + 1)
-        path = ca.vec(path_map(all_states, tn.T, ca.repmat(u, 1, n + 1), ca.repmat(c, 1, n + 1)).T)
-    return dict(z=z, params=params, defects=defects, final=final, path=path, u=u, u_all=u_all,
-                states=all_states, times=tn, context=c)
-
-
-@lru_cache(maxsize=None)
-def _rootfinder(spec: SubphaseSpec, intervals: int, substeps: int, free_mask: tuple, tol: float, max_iter: int):
-    tr = _transcription(spec, intervals, substeps, free_mask)
-    residual = ca.Function(f"{spec.name}_ms_residual", [tr["z"], tr["params"]],
-                           [ca.vertcat(tr["defects"], tr["final"])])
-    return ca.rootfinder(f"{spec.name}_ms_rf", "newton", residual,
-                         {"abstol": tol, "abstolStep": tol * 1e-3, "max_iter": max_iter,
-                          "error_on_fail": False,
-                          # a NaN trial step is handled (the solve fails, a fallback follows);
-                          # CasADi's warning for each would only bury the one-line report
-                          "show_eval_warnings": False})
-
-
-@lru_cache(maxsize=None)
-def _ipopt(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int):
-    free_mask = tuple(True for _ in range(spec.nu))
-    tr = _transcription(spec, intervals, substeps, free_mask)
-    n_u = spec.nu
-    u_nominal, u_scale = ca.SX.sym("u_nominal", n_u), ca.SX.sym("u_scale", n_u)
-    weights = ca.SX.sym("w", n_u)   # 1 for unknowns held fixed in the square problem
-    deviation = (tr["u"] - u_nominal) / u_scale
-    residuals = [weights * deviation, 1e-4 * deviation]
-    if spec.residuals is not None:
-        nodes = intervals + 1
-        running = spec.residuals.map(nodes)(tr["states"], tr["times"].T, ca.repmat(tr["u"], 1, nodes),
-                                            ca.repmat(tr["context"], 1, nodes))
-        residuals.append(ca.vec(running) / np.sqrt(nodes))
-    residuals = ca.vertcat(*residuals)
-    objective = ca.sumsqr(residuals)
-    g = ca.vertcat(tr["defects"], tr["final"], tr["path"] if tr["path"] is not None else ca.SX(0, 1))
-    p = ca.vertcat(tr["params"], u_nominal, u_scale, weights)
-    nlp = {"x": tr["z"], "p": p, "f": objective, "g": g}
-    opts = {"ipopt.tol": tol, "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter * 10,
-            "ipopt.print_level": 0, "print_time": False, "expand": True,
-            "ipopt.sb": "yes", "error_on_fail": False, "show_eval_warnings": False}
-    if spec.residuals is not None:
-        jac = ca.jacobian(residuals, tr["z"])
-        lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.numel())
-        opts["hess_lag"] = ca.Function("gauss_newton", [tr["z"], p, lam_f, lam_g],
-                                       [ca.triu(2 * lam_f * ca.mtimes(jac.T, jac))],
-                                       ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-    return ca.nlpsol(f"{spec.name}_ms_ipopt", "ipopt", nlp, opts)
+from .integrator import subphase_kernels
+from .ipopt_nlp import ipopt_solver
+from .newton import CondensedNewton
+from .problem import SubphaseProblem, SubphaseSolution, path_bounds
 
 
 class _Call:
@@ -140,7 +56,7 @@ class _Call:
 class MultipleShootingSolver:
     """Solve subphases by multiple shooting; see the module docstring for the formulation.
 
-    ``nlp``: "auto" (rootfinder, then IPOPT only if a path inequality is violated), "rootfinder"
+    ``nlp``: "auto" (Newton, then IPOPT only if a path inequality is violated), "rootfinder"
     (never IPOPT; a violated inequality is reported in the message) or "ipopt" (always).
     """
 
@@ -150,19 +66,21 @@ class MultipleShootingSolver:
                  max_iterations: int = 50, nlp: str = "auto"):
         self.intervals, self.substeps = int(intervals), int(substeps)
         self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
+        self._newton: dict = {}   # spec -> CondensedNewton (it keeps the last Jacobian for chord steps)
 
     # -- helpers -------------------------------------------------------------------------------
-    def _params(self, pb: SubphaseProblem, u_all, shift=None) -> np.ndarray:
-        shift = np.zeros(pb.spec.final.size1_out(0)) if shift is None else shift
-        return np.concatenate([pb.x0, pb.grid, pb.context, u_all, shift])
+    def _kernels(self, pb: SubphaseProblem, call: _Call):
+        kernels = subphase_kernels(pb.spec, self.substeps, self.intervals)
+        call.built(lambda: kernels.sim)   # the first use compiles or loads; kept out of the solve time
+        return kernels
 
-    def _simulate(self, pb: SubphaseProblem, u: np.ndarray) -> np.ndarray:
-        traj = trajectory_function(pb.spec, self.substeps, self.intervals)
-        xs = traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, self.intervals)),
-                  np.tile(pb.context[:, None], (1, self.intervals)))
-        return np.asarray(xs).T
+    def _simulate(self, pb: SubphaseProblem, u: np.ndarray, kernels) -> np.ndarray:
+        return kernels.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), u, pb.context)[0].reshape(self.intervals, -1)
 
-    def _initial_guess(self, pb: SubphaseProblem, free: list, call: _Call) -> tuple[np.ndarray, np.ndarray]:
+    def _final(self, pb: SubphaseProblem, kernels):
+        return lambda xs: kernels.final(xs[-1], pb.context)[0]
+
+    def _initial_guess(self, pb: SubphaseProblem, free: list, call: _Call, kernels) -> tuple[np.ndarray, np.ndarray]:
         """Free parameters and node states to start Newton from.
 
         A simulation with the given guess initialises the nodes. When its final conditions are
@@ -173,8 +91,8 @@ class MultipleShootingSolver:
         u = pb.guess.copy()
         if self._warm(pb):
             return u, np.asarray(pb.state_guess)[1:]
-        final = lambda xs: np.asarray(pb.spec.final(xs[-1], pb.context)).ravel()
-        xs = self._simulate(pb, u)
+        final = self._final(pb, kernels)
+        xs = self._simulate(pb, u, kernels)
         res = final(xs)
         for _ in range(8):
             if not np.all(np.isfinite(res)) or np.max(np.abs(res)) < 1e-3 or len(free) != res.size:
@@ -183,14 +101,14 @@ class MultipleShootingSolver:
             for j, i in enumerate(free):
                 du = 1e-4 * abs(pb.scale[i]) or 1e-6
                 trial = u.copy(); trial[i] += du
-                jac[:, j] = (final(self._simulate(pb, trial)) - res) / du
+                jac[:, j] = (final(self._simulate(pb, trial, kernels)) - res) / du
             try:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
                 break
             for damping in (1.0, 0.5, 0.25, 0.125):
                 trial = u.copy(); trial[free] += damping * step
-                xs_trial = self._simulate(pb, trial)
+                xs_trial = self._simulate(pb, trial, kernels)
                 res_trial = final(xs_trial)
                 if np.all(np.isfinite(res_trial)) and np.max(np.abs(res_trial)) < np.max(np.abs(res)):
                     u, xs, res = trial, xs_trial, res_trial
@@ -199,19 +117,21 @@ class MultipleShootingSolver:
                 break
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
             call.note("bracket")
-            u, xs = self._bracket_guess(pb, free[0], u, final)
+            u, xs = self._bracket_guess(pb, free[0], u, kernels)
         return u, np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
 
     def _warm(self, pb: SubphaseProblem) -> bool:
         """Whether the problem carries node states to start from (the previous step's solution)."""
         return pb.state_guess is not None and np.shape(pb.state_guess) == (self.intervals + 1, pb.spec.nx)
 
-    def _bracket_guess(self, pb, i, u, final, tol: float = 1e-4):
+    def _bracket_guess(self, pb, i, u, kernels, tol: float = 1e-4):
         """One free unknown whose single-shooting residual Newton could not reduce (a trajectory
         near a kinematic singularity): scan outwards for a sign change, then bisect it."""
+        final = self._final(pb, kernels)
+
         def f(value):
             trial = u.copy(); trial[i] = value
-            xs = self._simulate(pb, trial)
+            xs = self._simulate(pb, trial, kernels)
             return float(final(xs)[0]), trial, xs
         f0, best_u, best_xs = f(u[i])
         if not np.isfinite(f0):
@@ -235,17 +155,23 @@ class MultipleShootingSolver:
                     return trial, xs
         return best_u, best_xs
 
-    def _finish(self, pb, z, u, iterations, call: _Call, message, success_hint, nlp="rootfinder") -> SubphaseSolution:
+    def _finish(self, pb, nodes, u, iterations, call: _Call, message, success_hint, kernels,
+                nlp="rootfinder") -> SubphaseSolution:
+        """The solution from its node states 1..N, checked: residual and defects of the discrete
+        trajectory returned, path margins, plausibility."""
         spec, n = pb.spec, self.intervals
-        states = np.vstack([pb.x0, np.asarray(z[: n * spec.nx]).reshape(n, spec.nx)])
-        # The reported residual is that of the discrete trajectory the solver returns.
-        residual = float(np.max(np.abs(np.asarray(spec.final(states[-1], pb.context)))))
-        propagated = mapped(interval_function(spec, self.substeps), n)(
-            states[:-1].T, pb.grid[:-1], np.diff(pb.grid), u, pb.context)
-        defect = float(np.max(np.abs(np.asarray(propagated).T - states[1:])))
-        forces = np.asarray(mapped(spec.outputs, n + 1)(states.T, pb.grid, u, pb.context)).T
-        path_min = path_margin(pb, states, u)
-        plausible = plausibility_margin(pb, states) >= 0
+        states = np.vstack([pb.x0, np.asarray(nodes).reshape(n, spec.nx)])
+        t, h = pb.grid[:-1], np.diff(pb.grid)
+        residual = float(np.max(np.abs(kernels.final(states[-1], pb.context)[0])))
+        propagated = kernels.prop(states[:-1], t, h, u, pb.context)[0].reshape(n, spec.nx)
+        defect = float(np.max(np.abs(propagated - states[1:])))
+        forces, path, plausible = kernels.nodes(states, pb.grid, u, pb.context)
+        forces = forces.reshape(n + 1, -1)
+        path_min = float("inf")
+        lower = path_bounds(pb, pb.grid, states)
+        if lower is not None:
+            path_min = float(np.min(path.reshape(n + 1, -1) - lower))
+        plausible = bool(np.all(np.isfinite(plausible)) and np.all(plausible >= 0))
         ok = (success_hint and max(residual, defect) <= max(10 * self.tolerance, 1e-9)
               and np.all(np.isfinite(states)) and plausible)
         msg = message or ("" if ok else f"residual {residual:.3g}, defect {defect:.3g}"
@@ -256,38 +182,36 @@ class MultipleShootingSolver:
                                 fallbacks=list(call.fallbacks), build_s=call.build_s)
 
     # -- the two NLP forms ---------------------------------------------------------------------
+    def _newton_for(self, pb: SubphaseProblem, kernels) -> CondensedNewton:
+        if pb.spec not in self._newton:
+            self._newton[pb.spec] = CondensedNewton(kernels, self.tolerance, self.max_iterations)
+        return self._newton[pb.spec]
+
     def _solve_square(self, pb: SubphaseProblem, call: _Call) -> SubphaseSolution:
-        spec, n = pb.spec, self.intervals
-        free_mask = tuple(not f for f in pb.fixed)
-        rf = call.built(_rootfinder, spec, n, self.substeps, free_mask, self.tolerance, self.max_iterations)
-        free = [i for i, f in enumerate(free_mask) if f]
-        u0, xs0 = self._initial_guess(pb, free, call)
-        z0 = np.concatenate([xs0.ravel(), u0[free]])
-        z = np.asarray(rf(z0, self._params(pb, pb.guess))).ravel()
-        stats = rf.stats()
-        u = pb.guess.copy()
-        u[list(free_mask)] = z[n * spec.nx:]
-        result = self._finish(pb, z, u, int(stats.get("iter_count", stats.get("n_iter", 0)) or 0), call,
-                              "", bool(stats.get("success", True)))
+        spec = pb.spec
+        kernels = self._kernels(pb, call)
+        free = [i for i, fixed in enumerate(pb.fixed) if not fixed]
+        u0, xs0 = self._initial_guess(pb, free, call, kernels)
+        newton = self._newton_for(pb, kernels)
+        sol = newton.solve(pb.x0, pb.grid, u0, free, pb.context, xs0)
+        result = self._finish(pb, sol.states, sol.u, sol.iterations, call, "", sol.success, kernels)
         if not result.success and len(free) == 1:
             # Newton on the full system can stall where swing1's kinematic knee is near-singular;
             # a single-shooting root of the same discretisation has zero defects, so it solves
             # the same equations. Polish it by bisection on the one free parameter.
-            final = lambda xs: np.asarray(spec.final(xs[-1], pb.context)).ravel()
-            u_ss, xs = self._bracket_guess(pb, free[0], u0, final, tol=self.tolerance)
-            z_ss = np.concatenate([xs.ravel(), u_ss[free]])
+            u_ss, xs = self._bracket_guess(pb, free[0], u0, kernels, tol=self.tolerance)
             call.note("single-shooting-root")
-            polished = self._finish(pb, z_ss, u_ss, result.iterations, call, "", True)
+            polished = self._finish(pb, xs, u_ss, result.iterations, call, "", True, kernels)
             if polished.success:
                 polished.message = "Newton stalled; single-shooting root of the same equations"
                 return polished
         if not result.success:
-            homotopy = self._homotopy(pb, rf, u0, free_mask, call, result.iterations)
+            homotopy = self._homotopy(pb, newton, u0, free, call, result.iterations, kernels)
             if homotopy is not None:
                 return homotopy
         return result
 
-    def _homotopy(self, pb, rf, u0, free_mask, call: _Call, iterations: int, stages: int = 8):
+    def _homotopy(self, pb, newton, u0, free, call: _Call, iterations: int, kernels, stages: int = 8):
         """Newton along g(X_N) - (1 - lam) g0 = 0, lam = 1/stages ... 1, from the simulation of
         the guess (an exact solution at lam = 0: zero defects, final conditions g0).
 
@@ -296,35 +220,33 @@ class MultipleShootingSolver:
         reach; every stage of the continuation starts next to its root. The same continuation as
         plain shooting's homotopy, on the multiple-shooting equations.
         """
-        spec, n = pb.spec, self.intervals
         call.note("homotopy")
-        xs = self._simulate(pb, u0)
+        xs = self._simulate(pb, u0, kernels)
         if not np.all(np.isfinite(xs)):
             return None
-        g0 = np.asarray(spec.final(xs[-1], pb.context)).ravel()
-        z = np.concatenate([xs.ravel(), u0[list(free_mask)]])
+        g0 = self._final(pb, kernels)(xs)
+        u = u0
         for lam in np.linspace(1 / stages, 1.0, stages):
-            z = np.asarray(rf(z, self._params(pb, pb.guess, (1 - lam) * g0))).ravel()
-            stats = rf.stats()
-            iterations += int(stats.get("iter_count", stats.get("n_iter", 0)) or 0)
-            if not stats.get("success", True) or not np.all(np.isfinite(z)):
+            sol = newton.solve(pb.x0, pb.grid, u, free, pb.context, xs, (1 - lam) * g0)
+            iterations += sol.iterations
+            if not sol.success:
                 return None
-        u = pb.guess.copy()
-        u[list(free_mask)] = z[n * spec.nx:]
-        result = self._finish(pb, z, u, iterations, call, "", True)
+            xs, u = sol.states, sol.u
+        result = self._finish(pb, xs, u, iterations, call, "", True, kernels)
         return result if result.success else None
 
     def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
         spec, n = pb.spec, self.intervals
-        solver = call.built(_ipopt, spec, n, self.substeps, self.tolerance, self.max_iterations)
+        kernels = self._kernels(pb, call)
+        solver = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations)
         if start is not None and np.all(np.isfinite(start.states)):
             u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
-            u0, xs0 = self._initial_guess(pb, [], call)
+            u0, xs0 = self._initial_guess(pb, [], call, kernels)
         z0 = np.concatenate([xs0.ravel(), u0])
         # an optimised formulation is judged by its cost alone; otherwise stay near the nominal unknowns
         weights = np.array([1.0 if f and spec.residuals is None else 0.0 for f in pb.fixed])
-        params = np.concatenate([self._params(pb, pb.guess), pb.guess, pb.scale, weights])
+        params = np.concatenate([pb.x0, pb.grid, pb.context, pb.guess, pb.scale, weights])
         n_eq = n * spec.nx + spec.final.size1_out(0)
         iterations, active, result = 0, None, None
         for _ in range(4):
@@ -342,9 +264,9 @@ class MultipleShootingSolver:
             stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
             z0 = np.asarray(sol["x"]).ravel()
-            result = self._finish(pb, z0, z0[n * spec.nx:], iterations, call,
+            result = self._finish(pb, z0[: n * spec.nx], z0[n * spec.nx:], iterations, call,
                                   "" if stats.get("success") else str(stats.get("return_status")),
-                                  bool(stats.get("success")), "ipopt")
+                                  bool(stats.get("success")), kernels, "ipopt")
             if not result.success:
                 break
         if result.path_min < -1e-7:

@@ -1,0 +1,84 @@
+"""The multiple-shooting NLP for IPOPT, with compiled derivative functions.
+
+    min_z  |r(z)|^2    s.t.   X_{k+1} - Phi(X_k, u) = 0,   g(X_N) = 0,   h(X_k, t_k, u) >= lower_k
+
+``z = [X_1..X_N, u]`` (every unknown free), ``p = [x0, t_0..t_N, c, u_nominal, u_scale, weights]``.
+The residuals r are the deviations of the unknowns from their nominal values (``weights`` 1 for
+the unknowns the square problem holds fixed, so that a repair changes them as little as it can,
+and 1e-4 for all, so that the problem is never singular) and, for an optimised formulation, the
+spec's running residuals over the nodes divided by sqrt(N+1).
+
+IPOPT gets four functions, built here in MX around the per-interval RK4 of
+:func:`.integrator.rk4_interval` mapped over the grid (the block structure of multiple shooting;
+one Jacobian of the whole transcription in SX, as before, took 6 s and 740 MB to build), and
+compiled with the solver kernels (:mod:`.kernels`): ``nlp`` (f, g), ``grad_f``, ``jac_g`` and a
+Gauss-Newton ``hess_lag`` = 2 lam_f J_r^T J_r. The Gauss-Newton Hessian is exact for the
+objective's curvature when r is linear in z (the repairs) and drops the constraints' curvature,
+whose second derivatives through 80 RK4 stages cost 80 ms an evaluation and buy few iterations
+near a small-residual optimum.
+"""
+from __future__ import annotations
+
+import sys
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from . import integrator
+from .integrator import rk4_interval
+from .kernels import KernelLibrary, source_key
+from .problem import SubphaseSpec
+
+NAMES = ("nlp", "grad_f", "jac_g", "hess_lag")
+
+
+def _build(spec: SubphaseSpec, n: int, substeps: int, compiling: bool) -> list:
+    nx, nu = spec.nx, spec.nu
+    step = rk4_interval(spec, substeps, False)
+    if not compiling:
+        step = step.expand()
+    z = ca.MX.sym("z", n * nx + nu)
+    x0, tn, c = ca.MX.sym("x0", nx), ca.MX.sym("t", n + 1), ca.MX.sym("c", spec.nc)
+    u_nominal, u_scale, weights = (ca.MX.sym(s, nu) for s in ("u_nominal", "u_scale", "w"))
+    p = ca.vertcat(x0, tn, c, u_nominal, u_scale, weights)
+    states = ca.reshape(z[: n * nx], nx, n)
+    u = z[n * nx:]
+    previous = ca.horzcat(x0, states[:, : n - 1])
+    propagated = step.map(n)(previous, tn[:n].T, (tn[1:] - tn[:n]).T, ca.repmat(u, 1, n), ca.repmat(c, 1, n))
+    g = [ca.vec(states - propagated), spec.final(states[:, n - 1], c)]
+    all_states = ca.horzcat(x0, states)
+    nodes = lambda fn: fn.map(n + 1)(all_states, tn.T, ca.repmat(u, 1, n + 1), ca.repmat(c, 1, n + 1))
+    if spec.path is not None:
+        g.append(ca.vec(nodes(spec.path).T))
+    g = ca.vertcat(*g)
+    deviation = (u - u_nominal) / u_scale
+    r = [weights * deviation, 1e-4 * deviation]
+    if spec.residuals is not None:
+        r.append(ca.vec(nodes(spec.residuals)) / np.sqrt(n + 1))
+    r = ca.vertcat(*r)
+    f = ca.sumsqr(r)
+    jac_r = ca.jacobian(r, z)
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
+    pre = f"{spec.name}_{n}_"
+    return [ca.Function(pre + "nlp", [z, p], [f, g], ["x", "p"], ["f", "g"]),
+            ca.Function(pre + "grad_f", [z, p], [f, ca.densify(2 * ca.mtimes(jac_r.T, r))], ["x", "p"], ["f", "grad_f_x"]),
+            ca.Function(pre + "jac_g", [z, p], [g, ca.jacobian(g, z)], ["x", "p"], ["g", "jac_g_x"]),
+            ca.Function(pre + "hess_lag", [z, p, lam_f, lam_g], [ca.triu(2 * lam_f * ca.mtimes(jac_r.T, jac_r))],
+                        ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])]
+
+
+@lru_cache(maxsize=None)
+def ipopt_solver(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int) -> ca.Function:
+    """IPOPT on the subphase's multiple-shooting NLP (built or loaded once per process)."""
+    parts = [source_key(sys.modules[__name__], integrator), "ipopt", spec.name, spec.nx, spec.nu, spec.nc, substeps, intervals]
+    for fn in (spec.rhs, spec.final, spec.path, spec.residuals):
+        parts.append(fn.serialize() if fn is not None else "-")
+    pre = f"{spec.name}_{intervals}_"
+    library = KernelLibrary(parts, [pre + n for n in NAMES], lambda compiling: _build(spec, intervals, substeps, compiling))
+    nlp, grad_f, jac_g, hess_lag = (library.casadi_external(pre + n) for n in NAMES)
+    opts = {"ipopt.tol": tol, "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter * 10,
+            "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "error_on_fail": False,
+            "show_eval_warnings": False, "calc_lam_p": False, "no_nlp_grad": True,
+            "grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
+    return ca.nlpsol(f"{spec.name}_ms_ipopt", "ipopt", nlp, opts)

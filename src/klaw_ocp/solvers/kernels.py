@@ -1,0 +1,250 @@
+"""CasADi Functions compiled to C once per machine, cached on disk, called from numpy.
+
+The solvers spend their time in a few SX Functions per subphase (the RK4 interval over the grid,
+its per-interval Jacobians, the final conditions). CasADi's virtual machine evaluates them about
+ten times slower than the same expressions compiled, and a CasADi call with numpy arguments
+costs tens of microseconds of conversion. A :class:`KernelLibrary` therefore
+
+1. looks for a shared library under a key that names the problem's structure (the subphase's
+   serialised right-hand side, the grid size, the CasADi version, this generator's version, the
+   compiler and its flags, the platform): a cache hit builds no CasADi expression at all;
+2. otherwise builds the Functions, generates C with CasADi's ``CodeGenerator`` and compiles it
+   with the system C compiler (``$CC``, else ``cc``/``gcc``), ``-O1`` (higher levels cost
+   compile time on these long straight-line bodies and gain a few per cent);
+3. calls the compiled functions through ``ctypes`` with preallocated work arrays (about 2 us a
+   call), or, without a working compiler (or with ``KLAW_OCP_JIT=0``), the same Functions
+   through CasADi: everything runs, only slower.
+
+The cache folder is ``$KLAW_OCP_CACHE_DIR``, else ``$XDG_CACHE_HOME/klaw_ocp``, else
+``~/.cache/klaw_ocp``. Several processes (sweep workers) may build the same library at once:
+each compiles into its own temporary file and renames it into place, which is atomic, so a
+reader sees either no library or a whole one. A library that does not load is rebuilt.
+
+Arrays cross this boundary flat, in CasADi's column-major order: an (nx, N) matrix is a numpy
+array of shape (N, nx) in C order. A kernel's work arrays are its own, so one kernel object must
+not be called from two threads at once (parallel sweeps use processes).
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import warnings
+from pathlib import Path
+from typing import Callable, Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+#: bump when the generated functions change in a way their key does not capture (the source of
+#: the modules that build them is part of the key already, see :func:`source_key`)
+GENERATOR_VERSION = "1"
+FLAGS = ("-O1", "-fPIC", "-shared")
+_DISABLED = ("0", "off", "false", "no")
+_lock = threading.Lock()
+_compiler_state: dict = {}
+
+
+def source_key(*modules) -> str:
+    """A digest of the source files of the modules that build a library: editing the code that
+    generates a kernel gives it a new key, so a stale compiled kernel is never loaded."""
+    digest = hashlib.sha256()
+    for module in (sys.modules[__name__], *modules):
+        digest.update(Path(module.__file__).read_bytes())
+    return digest.hexdigest()
+
+
+def cache_dir() -> Path:
+    """Where compiled kernels live (created on demand), one folder per CasADi version."""
+    root = os.environ.get("KLAW_OCP_CACHE_DIR")
+    if not root:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        root = os.path.join(base, "klaw_ocp")
+    return Path(root) / f"casadi-{ca.__version__}"
+
+
+def compiler() -> Optional[str]:
+    """The C compiler to use, or None (JIT disabled, or no compiler found)."""
+    if os.environ.get("KLAW_OCP_JIT", "1").strip().lower() in _DISABLED:
+        return None
+    if "path" not in _compiler_state:
+        candidates = [os.environ["CC"]] if os.environ.get("CC") else ["cc", "gcc", "clang"]
+        _compiler_state["path"] = next((shutil.which(c) for c in candidates if shutil.which(c)), None)
+    return _compiler_state["path"]
+
+
+def _compiler_identity(cc: str) -> str:
+    """The compiler's version line: part of the key, so an upgraded compiler rebuilds."""
+    if cc not in _compiler_state:
+        try:
+            out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30).stdout
+            _compiler_state[cc] = out.splitlines()[0] if out else cc
+        except (OSError, subprocess.SubprocessError):
+            _compiler_state[cc] = cc
+    return _compiler_state[cc]
+
+
+class _CFunction:
+    """One compiled CasADi function called through ctypes (dense inputs and outputs)."""
+
+    def __init__(self, lib: ctypes.CDLL, name: str):
+        self.name = name
+        self._fn = getattr(lib, name)
+        self._fn.restype = ctypes.c_int
+        self._fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int]
+        n_in, n_out = (getattr(lib, f"{name}_n_{s}") for s in ("in", "out"))
+        n_in.restype = n_out.restype = ctypes.c_longlong
+        sparsity = {}
+        for side, count in (("in", n_in()), ("out", n_out())):
+            fn = getattr(lib, f"{name}_sparsity_{side}")
+            fn.restype = ctypes.POINTER(ctypes.c_longlong)
+            fn.argtypes = [ctypes.c_longlong]
+            sparsity[side] = [self._dense_size(fn(i), side, i) for i in range(count)]
+        self.sizes_in, self.sizes_out = sparsity["in"], sparsity["out"]
+        work = getattr(lib, f"{name}_work")
+        sizes = [ctypes.c_longlong() for _ in range(4)]
+        work(*[ctypes.byref(s) for s in sizes])
+        sz_arg, sz_res, sz_iw, sz_w = (max(int(s.value), 1) for s in sizes)
+        self._arg = (ctypes.c_void_p * sz_arg)()
+        self._res = (ctypes.c_void_p * sz_res)()
+        self._iw = np.zeros(sz_iw, dtype=np.int64)
+        self._w = np.zeros(sz_w)
+        incref = getattr(lib, f"{name}_incref", None)
+        if incref is not None:
+            incref()
+        checkout = getattr(lib, f"{name}_checkout", None)
+        self._mem = int(checkout()) if checkout is not None else 0
+
+    def _dense_size(self, pattern, side: str, i: int) -> int:
+        rows, cols = int(pattern[0]), int(pattern[1])
+        if rows * cols and int(pattern[2]) != 1:   # CasADi's compact form marks a dense pattern with 1
+            raise ValueError(f"{self.name}: {side}put {i} is sparse; kernels take and return dense arrays")
+        return rows * cols
+
+    def __call__(self, *inputs) -> list:
+        keep = []
+        for i, (x, size) in enumerate(zip(inputs, self.sizes_in)):
+            a = np.ascontiguousarray(x, dtype=float).reshape(-1)
+            if a.size != size:
+                raise ValueError(f"{self.name}: input {i} has {a.size} entries, expected {size}")
+            keep.append(a)
+            self._arg[i] = a.ctypes.data
+        outputs = [np.empty(size) for size in self.sizes_out]
+        for i, out in enumerate(outputs):
+            self._res[i] = out.ctypes.data
+        status = self._fn(self._arg, self._res, self._iw.ctypes.data, self._w.ctypes.data, self._mem)
+        if status:
+            raise RuntimeError(f"{self.name}: compiled evaluation failed (status {status})")
+        return outputs
+
+
+class _CasadiFunction:
+    """The same calling convention on a CasADi Function (no compiler)."""
+
+    def __init__(self, fn: ca.Function):
+        self.name, self._fn = fn.name(), fn
+        self._shapes = [(fn.size1_in(i), fn.size2_in(i)) for i in range(fn.n_in())]
+        self.sizes_in = [r * c for r, c in self._shapes]
+        self.sizes_out = [fn.numel_out(i) for i in range(fn.n_out())]
+
+    def __call__(self, *inputs) -> list:
+        args = [np.asarray(x, float).reshape(c, r).T for x, (r, c) in zip(inputs, self._shapes)]
+        return [np.asarray(ca.densify(out)).ravel(order="F") for out in self._fn.call(args)]
+
+
+class KernelLibrary:
+    """Named CasADi Functions built on first use, compiled and cached when a compiler works.
+
+    ``build(compiling)`` returns the Functions named ``names``, in that order; it runs only when
+    the library is not in the cache or no compiler is available (``compiling`` says which: the
+    forms that compile well and those CasADi's virtual machine evaluates fastest differ). ``key_parts`` name
+    everything the generated code depends on besides CasADi's version and the compiler.
+    """
+
+    def __init__(self, key_parts: Sequence, names: Sequence[str], build: Callable[[bool], list]):
+        self._build, self._functions, self.names = build, None, tuple(names)
+        digest = hashlib.sha256()
+        for part in (GENERATOR_VERSION, sys.platform, platform.machine(), *key_parts):
+            digest.update(repr(part).encode() if not isinstance(part, (bytes, str)) else
+                          part.encode() if isinstance(part, str) else part)
+            digest.update(b"\0")
+        self._digest = digest
+        self.path: Optional[Path] = None
+        self.compiled = False
+
+    def _casadi_functions(self, compiling: bool = False) -> dict:
+        if self._functions is None:
+            self._functions = {fn.name(): fn for fn in self._build(compiling)}
+            if tuple(self._functions) != self.names:
+                raise ValueError(f"kernel library built {tuple(self._functions)}, expected {self.names}")
+        return self._functions
+
+    def _load(self) -> Optional[ctypes.CDLL]:
+        cc = compiler()
+        if cc is None:
+            return None
+        digest = self._digest.copy()
+        digest.update(" ".join([_compiler_identity(cc), *FLAGS]).encode())
+        folder = cache_dir()
+        path = folder / f"{digest.hexdigest()[:32]}.so"
+        if path.exists():
+            try:
+                lib = ctypes.CDLL(str(path))
+                self.path = path
+                return lib
+            except OSError:
+                pass   # a library from another machine sharing the folder, or damaged: rebuild
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            self._compile(cc, folder, path)
+            lib = ctypes.CDLL(str(path))
+        except (OSError, subprocess.SubprocessError, RuntimeError) as err:
+            self._functions = None   # built for compiling; CasADi evaluates another form faster
+            warnings.warn(f"klaw_ocp: compiling solver kernels failed ({err}); evaluating them "
+                          f"with CasADi instead (slower). Set KLAW_OCP_JIT=0 to skip compiling.",
+                          RuntimeWarning, stacklevel=3)
+            return None
+        self.path = path
+        return lib
+
+    def _compile(self, cc: str, folder: Path, path: Path) -> None:
+        with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
+            source = Path(tmp) / "kernels.c"
+            generator = ca.CodeGenerator(source.name, {"with_header": False})
+            for fn in self._casadi_functions(compiling=True).values():
+                generator.add(fn)
+            generator.generate(tmp + os.sep)
+            built = Path(tmp) / "kernels.so"
+            result = subprocess.run([cc, *FLAGS, str(source), "-o", str(built), "-lm"],
+                                    capture_output=True, text=True, timeout=900)
+            if result.returncode != 0:
+                raise RuntimeError(f"{cc} exited with {result.returncode}: {result.stderr.strip()[:300]}")
+            os.chmod(built, 0o755)
+            os.replace(built, path)   # atomic: concurrent builders each rename a whole library
+
+    def load(self) -> Optional[ctypes.CDLL]:
+        """Compile or load the library once (None: evaluate with CasADi)."""
+        with _lock:
+            if not hasattr(self, "_lib"):
+                self._lib = self._load()
+                self.compiled = self._lib is not None
+            return self._lib
+
+    def functions(self) -> dict:
+        """name -> callable on flat numpy arrays (compiled when possible; dense arrays only)."""
+        lib = self.load()
+        if lib is not None:
+            return {n: _CFunction(lib, n) for n in self.names}
+        return {n: _CasadiFunction(fn) for n, fn in self._casadi_functions().items()}
+
+    def casadi_external(self, name: str) -> ca.Function:
+        """A function as a CasADi Function (for nlpsol): the compiled one, else the built one."""
+        if self.load() is not None:
+            return ca.external(name, str(self.path))
+        return self._casadi_functions()[name]

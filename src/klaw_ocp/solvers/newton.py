@@ -1,0 +1,127 @@
+"""Newton's method on the multiple-shooting equations, by condensing, with chord steps.
+
+The square system of a subphase on N intervals, unknowns the node states X_1..X_N and the free
+parameters u (X_0 = x0 is given):
+
+    d_k = X_{k+1} - Phi(X_k, u) = 0   (k = 0..N-1),      g(X_N) - shift = 0.
+
+Its Jacobian is block bidiagonal: identity blocks, -A_k = -dPhi/dX_k below them, and a column of
+-B_k = -dPhi/du blocks. Newton's step follows from the linearisation by forward recursion
+(condensing, a block elimination of the same linear system, so the same step as a sparse LU of
+the whole Jacobian would give):
+
+    dX_k = S_k du + s_k,   S_{k+1} = A_k S_k + B_k,   s_{k+1} = A_k s_k - d_k,   S_0 = s_0 = 0,
+    G S_N du = -(g - shift) - G s_N.
+
+Only G S_N, a matrix of the size of u, is solved with. The blocks A_k, B_k come from the compiled
+``sens`` kernel (:class:`.integrator.SubphaseKernels`), one call for all intervals.
+
+Chord steps: a solve first checks the residual of its start point (often already converged: it is
+the simulation of the previous step's parameters), then steps with the last Jacobian it has,
+possibly the previous step's, and evaluates a new one only when the residual does not contract
+by ``CONTRACTION`` per step. A chord step that makes things worse is undone and taken again with
+a fresh Jacobian. Converged solutions satisfy the same tolerance as plain Newton's.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: a chord step must reduce the residual's max-norm at least this much, else the Jacobian is renewed
+CONTRACTION = 0.25
+
+
+@dataclass
+class _Linearisation:
+    """Jacobian blocks of one point, with the condensed matrix factorised."""
+    A: np.ndarray        # (N, nx, nx)
+    B: np.ndarray        # (N, nx, n_free)
+    G: np.ndarray        # (nf, nx)
+    S: np.ndarray        # (N + 1, nx, n_free): sensitivities of the nodes to u
+    M: np.ndarray        # (nf, n_free): G S_N, the condensed Newton matrix
+
+
+@dataclass
+class NewtonResult:
+    states: np.ndarray   # (N, nx): nodes 1..N
+    u: np.ndarray        # all parameters (fixed ones unchanged)
+    residual: float      # max |d|, |g - shift| at the returned point
+    iterations: int
+    jacobians: int       # fresh Jacobian evaluations
+    success: bool
+
+
+class CondensedNewton:
+    """Solve the square multiple-shooting system of one kernel set; keeps its last Jacobian."""
+
+    def __init__(self, kernels, tolerance: float, max_iterations: int):
+        self.k, self.tol, self.max_iterations = kernels, float(tolerance), int(max_iterations)
+        self.nx, self.n = kernels.spec.nx, kernels.intervals
+        self._last: dict = {}   # free-index tuple -> _Linearisation (the chord's Jacobian)
+
+    def _residual(self, x0, t, h, u, c, X, shift):
+        starts = np.vstack([x0, X[:-1]])
+        xf = self.k.prop(starts, t, h, u, c)[0].reshape(self.n, self.nx)
+        g, G = self.k.final(X[-1], c)
+        return X - xf, g - shift, G.reshape(self.nx, -1).T
+
+    def _linearise(self, x0, t, h, u, c, X, free, G):
+        starts = np.vstack([x0, X[:-1]])
+        xf, jac = self.k.sens(starts, t, h, u, c)
+        nx = self.nx
+        jac = jac.reshape(self.n, nx + self.k.spec.nu, nx).transpose(0, 2, 1)
+        A, B = jac[:, :, :nx], jac[:, :, nx + np.asarray(free)]
+        S = np.zeros((self.n + 1, nx, len(free)))
+        for k in range(self.n):
+            S[k + 1] = A[k] @ S[k] + B[k]
+        return _Linearisation(A, B, G, S, G @ S[-1]), X - xf.reshape(self.n, nx)
+
+    def _step(self, lin: _Linearisation, d, g):
+        s = np.zeros(self.nx)
+        s_all = np.empty((self.n + 1, self.nx))
+        s_all[0] = s
+        for k in range(self.n):
+            s = lin.A[k] @ s - d[k]
+            s_all[k + 1] = s
+        du = np.linalg.solve(lin.M, -g - lin.G @ s)   # the size of u: factorising costs nothing
+        dX = np.einsum("kij,j->ki", lin.S[1:], du) + s_all[1:]
+        return dX, du
+
+    def solve(self, x0, grid, u, free, c, X, shift=None) -> NewtonResult:
+        """Newton from node states ``X`` (N, nx) and parameters ``u`` (only ``free`` change)."""
+        t, h = grid[:-1], np.diff(grid)
+        free, u, X = tuple(free), np.array(u, float), np.array(X, float)
+        shift = 0.0 if shift is None else np.asarray(shift)
+        d, g, G = self._residual(x0, t, h, u, c, X, shift)
+        norm = _max_abs(d, g)
+        lin, fresh, iterations, jacobians = self._last.get(free), False, 0, 0
+        while np.isfinite(norm) and norm > self.tol and iterations < self.max_iterations:
+            if lin is None:
+                lin, d = self._linearise(x0, t, h, u, c, X, free, G)
+                fresh, jacobians = True, jacobians + 1
+                self._last[free] = lin
+            try:
+                dX, du = self._step(lin, d, g)
+            except (np.linalg.LinAlgError, ValueError):
+                break
+            X_new, u_new = X + dX, u.copy()
+            u_new[list(free)] += du
+            iterations += 1
+            d_new, g_new, G_new = self._residual(x0, t, h, u_new, c, X_new, shift)
+            norm_new = _max_abs(d_new, g_new)
+            if not fresh and not norm_new < norm:
+                lin = None            # a stale Jacobian made it worse: undo, renew it here
+                continue
+            if not np.isfinite(norm_new):
+                break                 # a fresh Newton step left the domain: a fallback's turn
+            X, u, d, g, G = X_new, u_new, d_new, g_new, G_new
+            if norm_new > CONTRACTION * norm and norm_new > self.tol:
+                lin = None            # poor contraction: renew the Jacobian at the new point
+            norm, fresh = norm_new, False
+        return NewtonResult(X, u, float(norm), iterations, jacobians, bool(norm <= self.tol))
+
+
+def _max_abs(d, g) -> float:
+    values = np.concatenate([np.ravel(d), np.ravel(g)])
+    return float(np.max(np.abs(values))) if np.all(np.isfinite(values)) else float("inf")
