@@ -17,15 +17,35 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..body import Body
-from ..dynamics.kinematics import foot_points
+from ..dynamics.kinematics import foot_points_float
 
 
-def _rot(v, angle):
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+def root(f, a: float, b: float, xtol: float) -> float:
+    """A root of f in [a, b], where f changes sign: regula falsi with the Illinois modification
+    (superlinear, never leaves the bracket). The searches below run thousands of times a walk on
+    plain float functions; this keeps them free of scipy's import and call overhead."""
+    fa, fb = f(a), f(b)
+    if fa == 0 or fb == 0:
+        return a if fa == 0 else b
+    if fa * fb > 0:
+        raise ValueError(f"no sign change of f on [{a}, {b}]")
+    for _ in range(200):
+        c = b - fb * (b - a) / (fb - fa)
+        if not min(a, b) <= c <= max(a, b):
+            c = 0.5 * (a + b)
+        fc = f(c)
+        if fc == 0:
+            return c
+        if fc * fb < 0:
+            a, fa = b, fb
+        else:
+            fa *= 0.5
+        b, fb = c, fc
+        if abs(b - a) <= xtol:
+            break
+    return b
 
 
 def metatarsal_offset(body: Body) -> float:
@@ -35,15 +55,20 @@ def metatarsal_offset(body: Body) -> float:
 
 def hind_ankle(body: Body, metatarsal_x: float, pitch: float) -> np.ndarray:
     """Ankle of a foot pitched by ``pitch`` (rad, heel up) about the metatarsal head on the ground."""
-    flat = np.array([-metatarsal_offset(body), body.l9])   # ankle relative to the metatarsal head
-    return np.array([metatarsal_x, 0.0]) + _rot(flat, -pitch)
+    return np.array(_hind_ankle(body, metatarsal_x, pitch))
+
+
+def _hind_ankle(body: Body, metatarsal_x: float, pitch: float) -> tuple[float, float]:
+    # the flat-foot ankle relative to the metatarsal head, (-offset, l9), rotated by -pitch
+    c, s, ox = math.cos(pitch), math.sin(pitch), -metatarsal_offset(body)
+    return metatarsal_x + c * ox + s * body.l9, -s * ox + c * body.l9
 
 
 def leg_angles(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[float, float]:
     """(theta3, theta4) of the swing-model leg reaching from ``hip`` to ``ankle`` (knee forward)."""
-    d_vec = ankle - hip
-    d = min(float(np.hypot(*d_vec)), body.l1)
-    beta = math.atan2(-d_vec[0], -d_vec[1])
+    dx, dy = float(ankle[0] - hip[0]), float(ankle[1] - hip[1])
+    d = min(math.hypot(dx, dy), body.l1)
+    beta = math.atan2(-dx, -dy)
     cos_delta = (body.l3 ** 2 + d ** 2 - body.l4 ** 2) / (2 * body.l3 * d)
     cos_knee = (d ** 2 - body.l3 ** 2 - body.l4 ** 2) / (2 * body.l3 * body.l4)
     return beta - math.acos(max(-1.0, min(1.0, cos_delta))), math.acos(max(-1.0, min(1.0, cos_knee)))
@@ -57,12 +82,16 @@ REACH_FRACTION = 1 - 1e-3
 
 def reach_pitch(body: Body, hip: np.ndarray, metatarsal_x: float) -> float:
     """Smallest foot pitch at which the leg reaches the ankle (0 if it reaches it flat)."""
-    reach = lambda p: float(np.hypot(*(hind_ankle(body, metatarsal_x, p) - hip))) - body.l1 * REACH_FRACTION
+    hx, hy = float(hip[0]), float(hip[1])
+
+    def reach(p):
+        ax, ay = _hind_ankle(body, metatarsal_x, p)
+        return math.hypot(ax - hx, ay - hy) - body.l1 * REACH_FRACTION
     if reach(0.0) <= 0:
         return 0.0
     if reach(math.radians(89)) > 0:
         return math.radians(89)
-    return brentq(reach, 0.0, math.radians(89), xtol=1e-15)
+    return root(reach, 0.0, math.radians(89), xtol=1e-15)
 
 
 #: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at
@@ -87,14 +116,14 @@ def toe_off_pitch(body: Body, hip: np.ndarray, metatarsal_x: float, pitch_start:
     wanted = max(pitch_wanted, pitch_start)
     reach = reach_pitch(body, hip, metatarsal_x)
     bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
-    thigh = lambda pitch: leg_angles(body, hip, hind_ankle(body, metatarsal_x, pitch))[0] - bound
+    thigh = lambda pitch: leg_angles(body, hip, _hind_ankle(body, metatarsal_x, pitch))[0] - bound
     if thigh(max(wanted, reach)) >= 0:      # :func:`hind_leg` raises the pitch to the reach pitch
         return wanted
     lowest = max(pitch_start, reach)
     if thigh(lowest) <= 0:
         return lowest
     # the thigh angle falls monotonically as the heel rises (the ankle comes up towards the hip)
-    return brentq(thigh, lowest, wanted, xtol=1e-13)
+    return root(thigh, lowest, wanted, xtol=1e-13)
 
 
 @dataclass(frozen=True)
@@ -126,11 +155,14 @@ def ankle_angle(shank_angle: float, pitch: float) -> float:
 
 def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -> tuple[np.ndarray, float]:
     """Ankle position and shank angle with the toe tip directly under the knee (end of swing1)."""
+    kx, ky = float(knee[0]), float(knee[1])
+    dims = (body.l8, body.l9, body.l12, body.l13)
+
     def toe_ahead(phi):
-        ankle = knee - body.l4 * np.array([math.sin(phi), math.cos(phi)])
-        return float(foot_points(body, ankle, phi, theta5, theta6)["toe"][0] - knee[0])
-    phi = brentq(toe_ahead, -0.5, math.pi / 2, xtol=1e-13)
-    return knee - body.l4 * np.array([math.sin(phi), math.cos(phi)]), phi
+        ankle = kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)
+        return foot_points_float(*ankle, phi, theta5, theta6, *dims)[2][0] - kx
+    phi = root(toe_ahead, -0.5, math.pi / 2, xtol=1e-13)
+    return np.array([kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)]), phi
 
 
 def curve_p_coefficients(a0: float, a_max: float, a_min: float, c: float, d: float) -> np.ndarray:
@@ -154,7 +186,8 @@ def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, thet
     """
     def toe_height(theta5):
         ankle, phi = toe_under_knee(body, knee, theta5, theta6)
-        return float(foot_points(body, ankle, phi, theta5, theta6)["toe"][1]) - clearance
+        toe = foot_points_float(ankle[0], ankle[1], phi, theta5, theta6, body.l8, body.l9, body.l12, body.l13)[2]
+        return toe[1] - clearance
 
     theta5 = theta5_natural
     if toe_height(theta5) < 0:
@@ -162,6 +195,6 @@ def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, thet
         if toe_height(upper) < 0:
             theta5 = upper
         else:
-            theta5 = brentq(toe_height, theta5_natural, upper, xtol=1e-12)
+            theta5 = root(toe_height, theta5_natural, upper, xtol=1e-12)
     ankle, phi = toe_under_knee(body, knee, theta5, theta6)
     return ankle, phi, theta5

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..body import Body
-from ..dynamics import knee_lock_map, stance_hip
+from ..dynamics import knee_lock_map, stance_hips
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 #: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
@@ -166,25 +166,23 @@ class StepController:
         sctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
 
-        def stance_at(time):
-            k = int(np.argmin(np.abs(stance.t - time)))
-            return stance.states[k]
+        hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
 
-        def hip_world(x):
-            return stance_hip(b, x[:6], origin)
+        def node(time):
+            return int(np.argmin(np.abs(stance.t - time)))
 
         # hind leg: toe on the ground, foot pitching about the metatarsal head until toe-off
         t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
         mt_x = inp.hind_ankle_x + metatarsal_offset(b)
-        hip0, _ = hip_world(stance.states[0])
+        hip0 = hips[0]
         pitch0 = reach_pitch(b, hip0, mt_x)
-        x_to = stance_at(t_to)
-        hip_to, hip_vel_to = hip_world(x_to)
+        k_to = node(t_to)
+        x_to, hip_to, hip_vel_to = stance.states[k_to], hips[k_to], hip_vels[k_to]
         pitch_to = toe_off_pitch(b, hip_to, mt_x, pitch0, math.radians(a.toe_off_foot_pitch), con.theta3)
         ds_nodes = [k for k in range(len(stance.t)) if stance.t[k] <= t_to + 1e-12]
         ds = {"t": [], "theta3": [], "theta4": [], "pitch": []}
         for k in ds_nodes:
-            leg = hind_leg(b, hip_world(stance.states[k])[0], mt_x, stance.t[k], t_to, pitch0, pitch_to)
+            leg = hind_leg(b, hips[k], mt_x, stance.t[k], t_to, pitch0, pitch_to)
             for key, val in (("t", stance.t[k]), ("theta3", leg.theta3), ("theta4", leg.theta4), ("pitch", leg.pitch)):
                 ds[key].append(val)
         leg_to = hind_leg(b, hip_to, mt_x, t_to, t_to, pitch0, pitch_to)
@@ -200,7 +198,7 @@ class StepController:
         theta5_to = ankle_angle(leg_to.theta3 + leg_to.theta4, leg_to.pitch)
         theta6_to = leg_to.pitch
         theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
-        hip_t1, _ = hip_world(stance_at(t1))
+        hip_t1 = hips[node(t1)]
         knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
         # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
         ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 0.01 * b.l1)

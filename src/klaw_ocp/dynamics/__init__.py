@@ -10,7 +10,8 @@ from .api import (hip_kinematics, stance_accelerations, stance_bias, stance_ener
 from .impacts import (CONSERVED, LOCK_RULES, NOT_CONSERVED, heel_strike_conserved, heel_strike_map,
                       heel_strike_map_sx, impact_functions, knee_lock_map, momentum_lock_sx,
                       stance_lock_map)
-from .kinematics import foot_points, foot_points_sx, stance_hip, swing_leg_points, upper_body_com
+from .kinematics import (foot_points, foot_points_float, foot_points_sx, stance_hip, stance_hips, swing_leg_points,
+                         upper_body_com)
 from .stance import (apply_lock, hip_kinematics_sx, stance_accelerations_sx, stance_energies,
                      stance_functions, stance_mass_bias, stance_points)
 from .swing import swing_accelerations_sx, swing_energies, swing_functions, swing_mass_bias, swing_points
@@ -24,7 +25,8 @@ __all__ = [
     "heel_strike_map_sx", "momentum_lock_sx", "impact_functions", "LOCK_RULES", "CONSERVED",
     "NOT_CONSERVED",
     # kinematics
-    "foot_points", "foot_points_sx", "swing_leg_points", "stance_hip", "upper_body_com",
+    "foot_points", "foot_points_float", "foot_points_sx", "swing_leg_points", "stance_hip", "stance_hips",
+    "upper_body_com",
     # symbolic models
     "stance_functions", "swing_functions", "stance_accelerations_sx", "swing_accelerations_sx",
     "hip_kinematics_sx", "apply_lock", "stance_mass_bias", "swing_mass_bias", "stance_energies",

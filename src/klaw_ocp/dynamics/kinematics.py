@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from ._checks import as_scalar, as_vector, check_body, to_numpy
@@ -57,13 +57,23 @@ def foot_points_sx(ankle, shank_angle, theta5, theta6, l8, l9, l12, l13) -> dict
     return {"heel": heel, "metatarsal": metatarsal, "toe": toe}
 
 
-@lru_cache(maxsize=None)
-def _foot_function() -> ca.Function:
-    """:func:`foot_points_sx` as one Function: a numeric call costs one evaluation, not a graph
-    of DM operations (the swing1 end posture calls it inside root searches)."""
-    ankle, angles, dims = ca.SX.sym("ankle", 2), ca.SX.sym("angles", 3), ca.SX.sym("dims", 4)
-    pts = foot_points_sx(ankle, angles[0], angles[1], angles[2], dims[0], dims[1], dims[2], dims[3])
-    return ca.Function("foot_points", [ankle, angles, dims], [pts["heel"], pts["metatarsal"], pts["toe"]])
+def foot_points_float(ankle_x: float, ankle_y: float, shank_angle: float, theta5: float, theta6: float,
+                      l8: float, l9: float, l12: float, l13: float) -> tuple:
+    """:func:`foot_points_sx` in plain float arithmetic: ``((heel), (metatarsal), (toe))`` as
+    (x, y) pairs. The double support's root searches evaluate it thousands of times a walk, where
+    a CasADi call (tens of microseconds) would cost more than the walk's dynamics; a test holds
+    the two forms equal."""
+    ux, uy = math.sin(shank_angle), math.cos(shank_angle)
+    c5, s5 = math.cos(theta5), math.sin(theta5)
+    bx, by = c5 * ux - s5 * uy, s5 * ux + c5 * uy        # u_b: u rotated CCW by theta5
+    fx, fy = -bx, -by                                    # u_f
+    nx, ny = -fy, fx                                     # n: u_f rotated CCW by 90 deg
+    heel = (ankle_x + l8 * bx - l9 * nx, ankle_y + l8 * by - l9 * ny)
+    reach = math.sqrt(l12 ** 2 - l9 ** 2)
+    mx, my = ankle_x + reach * fx - l9 * nx, ankle_y + reach * fy - l9 * ny
+    c6, s6 = math.cos(theta6), math.sin(theta6)
+    toe = (mx + l13 * (c6 * fx - s6 * fy), my + l13 * (s6 * fx + c6 * fy))
+    return heel, (mx, my), toe
 
 
 def foot_points(body, ankle, shank_angle, theta5, theta6=0.0) -> dict:
@@ -71,8 +81,9 @@ def foot_points(body, ankle, shank_angle, theta5, theta6=0.0) -> dict:
     body = check_body(body)
     ankle = as_vector("ankle", ankle, 2)
     angles = [as_scalar("shank_angle", shank_angle), as_scalar("theta5", theta5), as_scalar("theta6", theta6)]
-    pts = _foot_function()(ankle, angles, [body.l8, body.l9, body.l12, body.l13])
-    return {k: to_numpy(v) for k, v in zip(("heel", "metatarsal", "toe"), pts)}
+    pts = foot_points_float(float(ankle[0]), float(ankle[1]), *map(float, angles),
+                            body.l8, body.l9, body.l12, body.l13)
+    return {k: np.array(v) for k, v in zip(("heel", "metatarsal", "toe"), pts)}
 
 
 def swing_leg_points(body, q, hip, theta5=math.pi / 2, theta6=0.0) -> dict:
@@ -99,6 +110,20 @@ def stance_hip(body, x_stance, ankle):
     ankle = as_vector("ankle", ankle, 2)
     pos, vel, _ = stance_functions()["hip"](x[:3], x[3:], np.zeros(3))
     return ankle + to_numpy(pos), to_numpy(vel)
+
+
+def stance_hips(body, states, ankle) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`stance_hip` of many stance states ``(n, >=6)`` in one call: world hip positions and
+    velocities, each ``(n, 2)``."""
+    check_body(body)
+    states = np.atleast_2d(np.asarray(states, float))[:, :6]
+    pos, vel, _ = _hip_map(len(states))(states[:, :3].T, states[:, 3:].T, np.zeros((3, 1)))
+    return np.asarray(ankle, float) + np.asarray(pos).T, np.asarray(vel).T
+
+
+@lru_cache(maxsize=None)
+def _hip_map(n: int):
+    return stance_functions()["hip"].map(n)
 
 
 def upper_body_com(body, q_stance, ankle):
