@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .dynamics import stance_hip
+from .dynamics import stance_hips
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -32,24 +32,25 @@ def _rows_for_step(step, body) -> list[dict]:
 
     ankle = np.array([step.origin_x, body.l9])
 
-    def base(t, name, xs, forces):
-        hip, _ = stance_hip(body, xs[:6], ankle)
+    def base(t, name, xs, forces, hip):
         return {"t": step.t_start + t, "step": step.index, "subphase": name,
                 "w": xs[0], "theta1": xs[1], "theta2": xs[2], "wd": xs[3], "theta1d": xs[4], "theta2d": xs[5],
                 "hip_x": hip[0], "hip_y": hip[1],
                 "F_w": forces[0], "F_theta1": forces[1], "F_theta2": forces[2], "pa": forces[3]}
 
+    stance_hip_xy = stance_hips(body, stance.states, ankle)[0]
     for k in range(len(ds["t"]) - 1):          # the toe-off node opens swing1
-        row = base(ds["t"][k], "double_support", stance.states[k], stance.forces[k])
+        row = base(ds["t"][k], "double_support", stance.states[k], stance.forces[k], stance_hip_xy[k])
         row.update(theta3=ds["theta3"][k], theta4=ds["theta4"][k], theta3d=rates3[k], theta4d=rates4[k],
                    F_theta3=float("nan"), F_theta4=float("nan"))
         rows.append(row)
     for sub in step.subphases[1:]:
+        hips = stance_hips(body, sub.states, ankle)[0]   # the stance state rides along in the swing
         for k in range(len(sub.t)):
             if sub.name != "swing1" and k == 0:
                 continue                          # same instant as the previous subphase's end
             x, f = sub.states[k], sub.forces[k]
-            row = base(sub.t[k], sub.name, x, f)
+            row = base(sub.t[k], sub.name, x, f, hips[k])
             if sub.name == "swing1":
                 row.update(theta3=x[6], theta4=x[7], theta3d=x[8], theta4d=float("nan"))
             elif sub.name == "swing2":
@@ -83,7 +84,7 @@ def hip_dip(body, stance) -> float:
     """How far the hip goes below the lower of its step's two heel-strike heights (0 if never):
     §4's "never … below its minimal value at heel strike", a hard constraint only in the
     tracking stance."""
-    y = np.array([stance_hip(body, x, np.zeros(2))[0][1] for x in stance.states])
+    y = stance_hips(body, stance.states, np.zeros(2))[0][:, 1]
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 

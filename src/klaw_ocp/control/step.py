@@ -17,6 +17,7 @@ from ..body import Body
 from ..dynamics import knee_lock_map, stance_hips
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
+from ..solvers.problem import mapped
 #: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
 #: (steady steps: about 0.43 from the toe-under-knee rule). See docs/solvers.md, "The first step".
 MIN_CURVE_P_TRAVEL = 0.4
@@ -238,8 +239,9 @@ class StepController:
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c, self._guess("swing3", 1),
             self.scales["swing3"]))
-        heel = [float(specs["swing3"].path(s3.states[k], s3.t[k], [s3.parameters["F_theta3_moment"]], c))
-                for k in range(len(s3.t) - 1)]
+        nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
+        heel = np.asarray(mapped(specs["swing3"].path, nodes)(
+            s3.states[:-1].T, s3.t[:-1], [s3.parameters["F_theta3_moment"]], c)).ravel()
         notes = lock_rule_notes(stance, b.l1)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, s1, s2, s3],
@@ -247,5 +249,5 @@ class StepController:
                           curve_p={"a0": a0, "a_max": a_max, "a_min": a_min, "C": a.swing_peak_position * d_travel,
                                    "D": d_travel, "x0": x0, "coefficients": coeffs.tolist(),
                                    "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
-                          final_stance_state=stance.final_state, heel_clearance_min=min(heel) if heel else 0.0,
+                          final_stance_state=stance.final_state, heel_clearance_min=float(heel.min()) if heel.size else 0.0,
                           plan=plan, notes=notes)

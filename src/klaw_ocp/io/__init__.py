@@ -1,4 +1,4 @@
 """Writers of result files. They read results and never drive a solve (STYLE.md)."""
-from .writers import write_walk
+from .writers import render_walk, write_rendered, write_walk
 
-__all__ = ["write_walk"]
+__all__ = ["render_walk", "write_rendered", "write_walk"]

@@ -57,10 +57,23 @@ def dynamics_csv(walk) -> str:
     return buffer.getvalue()
 
 
+def render_walk(walk) -> dict:
+    """Every result file of ``walk`` in memory: name -> (file name, bytes). Rendering is separate
+    from writing so that the benchmark can time the two, and a failure to render writes nothing."""
+    return {"dynamics": ("dynamics.csv", dynamics_csv(walk).encode("utf-8")),
+            "summary": ("summary.json", (json.dumps(walk_summary(walk), indent=2, allow_nan=False) + "\n").encode("utf-8"))}
+
+
+def write_rendered(files: dict, out_dir) -> dict:
+    """Write rendered files (:func:`render_walk`) atomically into ``out_dir``; returns name -> path."""
+    out = Path(out_dir)
+    paths = {}
+    for name, (filename, data) in files.items():
+        paths[name] = out / filename
+        atomic_write_bytes(paths[name], data)
+    return paths
+
+
 def write_walk(walk, out_dir) -> dict:
     """Write every result file of ``walk`` into ``out_dir``; returns name -> path."""
-    out = Path(out_dir)
-    paths = {"summary": out / "summary.json", "dynamics": out / "dynamics.csv"}
-    atomic_write_text(paths["dynamics"], dynamics_csv(walk))
-    atomic_write_text(paths["summary"], json.dumps(walk_summary(walk), indent=2, allow_nan=False) + "\n")
-    return paths
+    return write_rendered(render_walk(walk), out_dir)
