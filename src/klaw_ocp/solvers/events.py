@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .integrator import interval_function, trajectory_function
-from .problem import SubphaseProblem, mapped
+from .integrator import subphase_kernels
+from .problem import SubphaseProblem
 
 
 class EventIntegrator:
@@ -29,26 +29,25 @@ class EventIntegrator:
         """
         spec = pb.spec
         n = pb.grid.size - 1
-        traj = trajectory_function(spec, self.substeps, n)
-        fast = np.asarray(traj(pb.x0, pb.grid[:-1], np.diff(pb.grid), np.tile(u[:, None], (1, n)),
-                               np.tile(pb.context[:, None], (1, n)))).T
+        kernels = subphase_kernels(spec, self.substeps, n)
+        fast = kernels.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), u, pb.context)[0].reshape(n, spec.nx)
         states = np.vstack([pb.x0, fast])
-        start = self._first_sign_change(spec, pb, states, u) if armed else None
+        start = self._first_sign_change(kernels, pb, states, u) if armed and spec.events else None
         if start is None:
             return pb.grid.copy(), states, pb.context.copy(), []
-        step = interval_function(spec, self.substeps)
+        step = lambda x, t, h, u, c: kernels.step(x, t, h, u, c)[0]
         c, mode = pb.context.copy(), {}
         x = states[start].copy()
         times, out, log = list(pb.grid[: start + 1]), list(states[: start + 1]), []
         for k in range(start, n):
             t0, t1 = pb.grid[k], pb.grid[k + 1]
             while True:
-                x1 = np.asarray(step(x, t0, t1 - t0, u, c)).ravel()
-                hit = self._first_event(spec, pb, x, t0, x1, t1, u, c, mode)
+                x1 = step(x, t0, t1 - t0, u, c)
+                hit = self._first_event(kernels, x, t0, x1, t1, u, c, mode)
                 if hit is None:
                     break
                 event, h = hit
-                x = np.asarray(step(x, t0, h, u, c)).ravel()
+                x = step(x, t0, h, u, c)
                 t0 = t0 + h
                 x, c, mode = event.apply(x, c, mode)
                 times.append(t0)
@@ -61,44 +60,41 @@ class EventIntegrator:
                 break
         return np.array(times), np.array(out), c, log
 
-    def _first_sign_change(self, spec, pb, states, u):
+    def _first_sign_change(self, kernels, pb, states, u):
         """Index of the first interval on which an event armed in the initial mode fires."""
+        values = kernels.samples(states, pb.grid, u, pb.context)[3]
         first = None
-        for event in spec.events:
-            values = np.asarray(mapped(event.fn, len(states))(
-                states.T, pb.grid[None, :], np.tile(u[:, None], (1, len(states))),
-                np.tile(pb.context[:, None], (1, len(states))))).ravel()
+        for e, event in enumerate(kernels.spec.events):
             d = event.direction
             for k in range(len(states) - 1):
                 if first is not None and k >= first:
                     break
-                if values[k] * d < 0 <= values[k + 1] * d and event.guard(states[k], pb.grid[k], pb.context, {}):
+                if values[k, e] * d < 0 <= values[k + 1, e] * d and event.guard(states[k], pb.grid[k], pb.context, {}):
                     first = k
                     break
         return first
 
-    def _first_event(self, spec, pb, x0, t0, x1, t1, u, c, mode):
+    def _first_event(self, kernels, x0, t0, x1, t1, u, c, mode):
         best = None
-        for event in spec.events:
+        g0_all, g1_all = kernels.events(x0, t0, u, c)[0], kernels.events(x1, t1, u, c)[0]
+        for e, event in enumerate(kernels.spec.events):
             if not event.guard(x0, t0, c, mode):
                 continue
-            g0 = float(event.fn(x0, t0, u, c))
-            g1 = float(event.fn(x1, t1, u, c))
+            g0, g1 = float(g0_all[e]), float(g1_all[e])
             if not (g0 * event.direction < 0 <= g1 * event.direction):
                 continue
-            h = self._locate(spec, event, x0, t0, t1 - t0, g0, g1, u, c)
+            h = self._locate(kernels, e, x0, t0, t1 - t0, g0, g1, u, c)
             if best is None or h < best[1]:
                 best = (event, h)
         return best
 
-    def _locate(self, spec, event, x0, t0, h, g0, g1, u, c):
-        step = interval_function(spec, self.substeps)
+    def _locate(self, kernels, e, x0, t0, h, g0, g1, u, c):
         a, b, ga, gb = 0.0, h, g0, g1
         for _ in range(60):
             m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
             if not a < m < b:
                 m = 0.5 * (a + b)
-            gm = float(event.fn(step(x0, t0, m, u, c), t0 + m, u, c))
+            gm = float(kernels.events(kernels.step(x0, t0, m, u, c)[0], t0 + m, u, c)[0][e])
             if abs(gm) < 1e-13 or b - a < 1e-14:
                 return m
             if gm * ga < 0:

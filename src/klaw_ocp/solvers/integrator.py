@@ -12,6 +12,7 @@ import sys
 from functools import lru_cache
 
 import casadi as ca
+import numpy as np
 
 from .problem import SubphaseSpec
 
@@ -53,8 +54,8 @@ class SubphaseKernels:
       d xf / d(x, u), the blocks of multiple shooting's Jacobian (forward AD of the RK4 interval);
     - ``step(x, t, h, u, c) -> xf``: one interval of any length (events, partial intervals);
     - ``final(x, c) -> g, G``: the final conditions and their Jacobian;
-    - ``nodes(X[nx, N+1], t[N+1], u, c) -> forces, path, plausible``: what is reported and
-      checked at the nodes (empty outputs when the spec has no path or plausibility functions);
+    - ``nodes(X[nx, N+1], t[N+1], u, c) -> forces, path, plausible, events``: what is reported
+      and checked at the nodes (empty outputs for functions the spec does not have);
     - ``events(x, t, u, c) -> values``: the event functions at one state.
     """
 
@@ -75,6 +76,22 @@ class SubphaseKernels:
                 self._fns = self.library.functions()
             return self._fns[f"{self.spec.name}_{name}"]
         raise AttributeError(name)
+
+    def samples(self, states, times, u, c) -> list:
+        """forces (M, no), path (M, nh), plausible (M, np) and event values (M, ne) at M samples:
+        the ``nodes`` kernel on the grid's nodes; CasADi's maps for a trajectory with event
+        samples added (plain shooting's lock events, rare)."""
+        states, times, m = np.asarray(states, float), np.asarray(times, float), len(times)
+        if m == self.intervals + 1:
+            return [v.reshape(m, -1) for v in self.nodes(states, times, u, c)]
+        spec, cols = self.spec, (states.T, times[None, :], np.tile(np.reshape(u, (-1, 1)), (1, m)),
+                                 np.tile(np.reshape(c, (-1, 1)), (1, m)))
+        out = [np.asarray(spec.outputs.map(m)(*cols)).T]
+        out.append(np.asarray(spec.path.map(m)(*cols)).T if spec.path is not None else np.zeros((m, 0)))
+        out.append(np.asarray(spec.plausible.map(m)(cols[0], cols[3])).T if spec.plausible is not None
+                   else np.zeros((m, 0)))
+        out.append(np.array([self.events(states[k], times[k], u, c)[0] for k in range(m)]).reshape(m, -1))
+        return out
 
     def _build(self, compiling: bool) -> list:
         spec, n = self.spec, self.intervals
@@ -98,12 +115,14 @@ class SubphaseKernels:
         fns.append(ca.Function(name("final"), [xs, cs], [g, ca.densify(ca.jacobian(g, xs))]))
         Xn, Tn = mx("X", nx, n + 1), mx("t", 1, n + 1)
         per_node = lambda fn, *args: fn.map(n + 1)(*args) if fn is not None else ca.MX(0, n + 1)
+        events = [e.fn(x, t, U, C) for e in spec.events]
+        event_fn = ca.Function(name("events"), [x, t, U, C], [ca.vertcat(*events) if events else ca.MX(0, 1)])
         fns.append(ca.Function(name("nodes"), [Xn, Tn, U, C], [
             per_node(spec.outputs, Xn, Tn, rep(U, n + 1), rep(C, n + 1)),
             per_node(spec.path, Xn, Tn, rep(U, n + 1), rep(C, n + 1)),
-            per_node(spec.plausible, Xn, rep(C, n + 1))]))
-        events = [e.fn(x, t, U, C) for e in spec.events]
-        fns.append(ca.Function(name("events"), [x, t, U, C], [ca.vertcat(*events) if events else ca.MX(0, 1)]))
+            per_node(spec.plausible, Xn, rep(C, n + 1)),
+            per_node(event_fn if events else None, Xn, Tn, rep(U, n + 1), rep(C, n + 1))]))
+        fns.append(event_fn)
         return fns
 
 

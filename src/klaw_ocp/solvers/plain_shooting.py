@@ -22,7 +22,8 @@ import numpy as np
 
 
 from .events import EventIntegrator
-from .problem import SubphaseProblem, SubphaseSolution, path_margin, plausibility_margin
+from .integrator import subphase_kernels
+from .problem import SubphaseProblem, SubphaseSolution, path_bounds
 
 
 class PlainShootingSolver:
@@ -54,7 +55,17 @@ class PlainShootingSolver:
         times, states, c, log = self.simulate(pb, u)
         if not np.all(np.isfinite(states[-1])):
             return np.full(pb.spec.final.size1_out(0), np.inf), (times, states, c, log)
-        return np.asarray(pb.spec.final(states[-1], c)).ravel(), (times, states, c, log)
+        return self._kernels(pb).final(states[-1], c)[0], (times, states, c, log)
+
+    def _kernels(self, pb):
+        return subphase_kernels(pb.spec, self.substeps, pb.grid.size - 1)
+
+    def _margins(self, pb, states, u, times, c=None):
+        """(smallest path margin, plausible) of a trajectory (event samples included)."""
+        _, path, plausible, _ = self._kernels(pb).samples(states, times, u, pb.context if c is None else c)
+        lower = path_bounds(pb, times, states)
+        path_min = float(np.min(path - lower)) if lower is not None else float("inf")
+        return path_min, bool(np.all(np.isfinite(plausible)) and np.all(plausible >= 0))
 
     # -- bisection, then secant -------------------------------------------------------------
     def _solve_1d(self, f, x0: float, scale: float, tol: float, probe: float):
@@ -305,7 +316,7 @@ class PlainShootingSolver:
             u_k, residual, n = self._solve_free(pb, trial)
             times, states, _, _ = self.simulate(pb, u_k)
             ok = (np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance
-                  and path_margin(pb, states, u_k, times) >= 0)
+                  and self._margins(pb, states, u_k, times)[0] >= 0)
             solved[k] = u_k
             return ok, residual, n + 1
 
@@ -338,17 +349,16 @@ class PlainShootingSolver:
         if pb.recovery_step is not None and pb.path_lower is not None:
             times, states, _, _ = self.simulate(pb, u)
             shots += 1
-            if path_margin(pb, states, u, times) < 0:
+            if self._margins(pb, states, u, times)[0] < 0:
                 self._note("recovery-loop")
                 u, residual, n, recovery = self._recover(pb, u)
                 shots += n
         times, states, c, log = self.simulate(pb, u)
-        residual = np.asarray(pb.spec.final(states[-1], c)).ravel()
+        residual = self._kernels(pb).final(states[-1], c)[0]
         res = float(np.max(np.abs(residual))) if np.all(np.isfinite(residual)) else float("inf")
-        forces = np.array([np.asarray(pb.spec.outputs(states[k], times[k], u, c)).ravel()
-                           for k in range(len(times))])
-        path_min = path_margin(pb, states, u, times)
-        plausible = plausibility_margin(pb, states) >= 0
+        # forces with the context the trajectory ends in (a lock event switches it), as before
+        forces = self._kernels(pb).samples(states, times, u, c)[0]
+        path_min, plausible = self._margins(pb, states, u, times)
         ok = res <= max(10 * self.tolerance, 1e-9) and path_min >= -1e-7 and plausible
         msg = "" if ok else (f"residual {res:.3g}" + (f", path constraint violated by {-path_min:.3g}"
                                                        if path_min < -1e-7 else "")

@@ -196,22 +196,3 @@ def path_bounds(pb: SubphaseProblem, times: np.ndarray, states: np.ndarray) -> O
         return np.asarray(pb.path_lower(np.asarray(times), np.asarray(states), pb.context), float)
     node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
     return pb.path_lower[node]
-
-
-def path_margin(pb: SubphaseProblem, states: np.ndarray, u: np.ndarray, times=None) -> float:
-    """Smallest ``h - lower`` over the samples (inf when the problem has no inequality)."""
-    times = pb.grid if times is None else np.asarray(times)
-    lower = path_bounds(pb, times, states)
-    if lower is None:
-        return float("inf")
-    values = np.asarray(mapped(pb.spec.path, len(times))(np.asarray(states).T, np.asarray(times), u, pb.context))
-    return float(np.min(values.T - lower))
-
-
-def plausibility_margin(pb: SubphaseProblem, states: np.ndarray) -> float:
-    """Smallest plausibility margin over the samples (inf when the spec has no such check)."""
-    if pb.spec.plausible is None:
-        return float("inf")
-    states = np.asarray(states)
-    values = np.asarray(mapped(pb.spec.plausible, len(states))(states.T, pb.context))
-    return float(np.min(values)) if np.all(np.isfinite(values)) else float("-inf")
