@@ -91,7 +91,8 @@ class EventIntegrator:
     def _locate(self, kernels, e, x0, t0, h, g0, g1, u, c):
         a, b, ga, gb = 0.0, h, g0, g1
         for _ in range(60):
-            m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
+            with np.errstate(invalid="ignore", divide="ignore"):   # a NaN trial falls back to bisection
+                m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
             if not a < m < b:
                 m = 0.5 * (a + b)
             gm = float(kernels.events(kernels.step(x0, t0, m, u, c)[0], t0 + m, u, c)[0][e])

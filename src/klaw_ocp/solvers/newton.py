@@ -20,7 +20,9 @@ Chord steps: a solve first checks the residual of its start point (often already
 the simulation of the previous step's parameters), then steps with the last Jacobian it has,
 possibly the previous step's, and evaluates a new one only when the residual does not contract
 by ``CONTRACTION`` per step. A chord step that makes things worse is undone and taken again with
-a fresh Jacobian. Converged solutions satisfy the same tolerance as plain Newton's.
+a fresh Jacobian; a step with a fresh Jacobian backtracks until |residual|_2 decreases (as
+CasADi's Newton rootfinder does). Converged solutions satisfy the same tolerance (max |residual|)
+as plain Newton's.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: a chord step must reduce the residual's max-norm at least this much, else the Jacobian is renewed
+#: a chord step must reduce |residual|_2 at least this much, else the Jacobian is renewed
 CONTRACTION = 0.25
 
 
@@ -94,7 +96,7 @@ class CondensedNewton:
         free, u, X = tuple(free), np.array(u, float), np.array(X, float)
         shift = 0.0 if shift is None else np.asarray(shift)
         d, g, G = self._residual(x0, t, h, u, c, X, shift)
-        norm = _max_abs(d, g)
+        norm, merit = _max_abs(d, g), _two_norm(d, g)
         lin, fresh, iterations, jacobians = self._last.get(free), False, 0, 0
         while np.isfinite(norm) and norm > self.tol and iterations < self.max_iterations:
             if lin is None:
@@ -105,21 +107,33 @@ class CondensedNewton:
                 dX, du = self._step(lin, d, g)
             except (np.linalg.LinAlgError, ValueError):
                 break
-            X_new, u_new = X + dX, u.copy()
-            u_new[list(free)] += du
             iterations += 1
-            d_new, g_new, G_new = self._residual(x0, t, h, u_new, c, X_new, shift)
-            norm_new = _max_abs(d_new, g_new)
-            if not fresh and not norm_new < norm:
+            # backtracking on |F|_2 (as CasADi's Newton rootfinder does): a stale Jacobian gets
+            # the full step only, a fresh one up to ten halvings
+            for alpha in (1.0,) if not fresh else 0.5 ** np.arange(11):
+                X_new, u_new = X + alpha * dX, u.copy()
+                u_new[list(free)] += alpha * du
+                d_new, g_new, G_new = self._residual(x0, t, h, u_new, c, X_new, shift)
+                merit_new = _two_norm(d_new, g_new)
+                if merit_new < merit:
+                    break
+            if not merit_new < merit:
+                if fresh:
+                    break             # no descent along Newton's direction: a fallback's turn
                 lin = None            # a stale Jacobian made it worse: undo, renew it here
                 continue
-            if not np.isfinite(norm_new):
-                break                 # a fresh Newton step left the domain: a fallback's turn
+            norm_new = _max_abs(d_new, g_new)
             X, u, d, g, G = X_new, u_new, d_new, g_new, G_new
-            if norm_new > CONTRACTION * norm and norm_new > self.tol:
+            if merit_new > CONTRACTION * merit and norm_new > self.tol:
                 lin = None            # poor contraction: renew the Jacobian at the new point
-            norm, fresh = norm_new, False
+            norm, merit, fresh = norm_new, merit_new, False
         return NewtonResult(X, u, float(norm), iterations, jacobians, bool(norm <= self.tol))
+
+
+def _two_norm(d, g) -> float:
+    with np.errstate(over="ignore", invalid="ignore"):   # a diverged trial point is just worse
+        value = float(np.sqrt(np.sum(np.square(d)) + np.sum(np.square(g))))
+    return value if np.isfinite(value) else float("inf")
 
 
 def _max_abs(d, g) -> float:

@@ -1,0 +1,140 @@
+"""Benchmark: the natural walk in every solver mode, warm and as a cold command, with the targets.
+
+    python benchmarks/bench_walk.py [CONFIG] [--repeats 5] [--json] [--all-cores]
+
+For each mode (multiple shooting with the paper's monitored stance, plain shooting, multiple
+shooting with the tracking stance) it runs the walk once to build or load the solvers, then
+``--repeats`` more times, and reports the medians of:
+
+- the solver build time (CasADi functions and compiled kernels, paid once per process);
+- each subphase's solve time and iterations (median over the walk's steps);
+- the dynamics (``simulate_walk``), the full pipeline (the dynamics plus every result file
+  rendered in memory) and the writing of the files;
+- the real-time factor (walked seconds per wall second of the full pipeline).
+
+Then it runs ``klaw-ocp run CONFIG`` twice as whole processes with an empty kernel cache (the
+first compiles the kernels, the second loads them) and reports their wall time and peak RSS.
+The process is pinned to one CPU unless ``--all-cores``. With ``--json`` the last line is one
+JSON object (``realtime_factor``, ``realtime_factor_plain_shooting``, ``realtime_factor_tracking``,
+``ms_over_ps_time_ratio``, ``cold_cli_s``, ``first_cold_cli_s``, ``peak_rss_mb``, ...).
+Timings are measured here and in docs/performance.md, never asserted in tests.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import replace
+
+from klaw_ocp.config import load_config
+from klaw_ocp.io import render_walk, write_rendered
+from klaw_ocp.walk import simulate_walk, walk_spec
+
+MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))
+TARGETS = (("realtime_factor", ">=", 50.0), ("ms_over_ps_time_ratio", "<=", 1.0),
+           ("realtime_factor_tracking", ">=", 10.0), ("cold_cli_s", "<=", 5.0), ("peak_rss_mb", "<=", 300.0))
+
+
+def _mode(config, method: str, stance: str, repeats: int) -> dict:
+    spec = replace(walk_spec(config, method), stance=stance)
+    first = simulate_walk(spec)   # builds or loads every solver of this mode
+    build = sum(s.build_s for step in first.steps for s in step.subphases)
+    dynamics, pipeline, writing, walk = [], [], [], first
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        walk = simulate_walk(spec)
+        t1 = time.perf_counter()
+        files = render_walk(walk)
+        t2 = time.perf_counter()
+        with tempfile.TemporaryDirectory() as out:
+            write_rendered(files, out)
+        t3 = time.perf_counter()
+        dynamics.append(t1 - t0); pipeline.append(t2 - t0); writing.append(t3 - t2)
+    per_subphase = {}
+    for name in ("stance", "swing1", "swing2", "swing3"):
+        subs = [step.subphase(name) for step in walk.steps]
+        per_subphase[name] = {"median_ms": 1e3 * statistics.median(s.wall_s for s in subs),
+                              "median_iterations": statistics.median(s.iterations for s in subs)}
+    pipe = statistics.median(pipeline)
+    return {"mode": f"{method}/{stance}", "steps": len(walk.steps), "walked_s": walk.duration, "build_s": build,
+            "dynamics_s": statistics.median(dynamics), "pipeline_s": pipe, "write_s": statistics.median(writing),
+            "realtime_factor": walk.duration / pipe, "subphases": per_subphase}
+
+
+def _cold_cli(config_path: str, cache: str) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one ``klaw-ocp run`` process."""
+    env = dict(os.environ, KLAW_OCP_CACHE_DIR=cache)
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        command = shutil.which("klaw-ocp") or "klaw-ocp"   # the command users type, as a whole process
+        proc = subprocess.Popen([command, "run", config_path, "--out", out, "--quiet"],
+                                env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t0
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise SystemExit(f"klaw-ocp run failed: {proc.stderr.read().decode()[-500:]}")
+    return wall, usage.ru_maxrss / 1024.0
+
+
+def _table(rows: list, cli: list) -> str:
+    lines = [f"{'mode':34s} {'steps':>5s} {'build s':>8s} {'dynamics s':>10s} {'pipeline s':>10s} "
+             f"{'write s':>8s} {'x real time':>11s}"]
+    for r in rows:
+        lines.append(f"{r['mode']:34s} {r['steps']:5d} {r['build_s']:8.3f} {r['dynamics_s']:10.4f} "
+                     f"{r['pipeline_s']:10.4f} {r['write_s']:8.4f} {r['realtime_factor']:11.1f}")
+    lines.append("")
+    lines.append(f"{'median solve, ms (iterations)':34s} " + " ".join(f"{n:>14s}" for n in ("stance", "swing1", "swing2", "swing3")))
+    for r in rows:
+        cells = [f"{v['median_ms']:7.2f} ({v['median_iterations']:g})" for v in r["subphases"].values()]
+        lines.append(f"{r['mode']:34s} " + " ".join(f"{c:>14s}" for c in cells))
+    lines.append("")
+    for label, (wall, rss) in zip(("first (compiles kernels)", "second (cached kernels)"), cli):
+        lines.append(f"cold `klaw-ocp run`, {label:24s} {wall:6.2f} s, peak RSS {rss:6.1f} MB")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("config", nargs="?", default="configs/natural_walk.yaml")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--json", action="store_true", help="end with one line of JSON")
+    parser.add_argument("--all-cores", action="store_true", help="do not pin the process to one CPU")
+    args = parser.parse_args()
+    if not args.all_cores and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    config = load_config(args.config)
+    rows = [_mode(config, method, stance, args.repeats) for method, stance in MODES]
+    own_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    with tempfile.TemporaryDirectory() as cache:
+        cli = [_cold_cli(args.config, cache) for _ in range(2)]
+    ms, ps, tracking = rows
+    result = {
+        "realtime_factor": ms["realtime_factor"],
+        "realtime_factor_plain_shooting": ps["realtime_factor"],
+        "realtime_factor_tracking": tracking["realtime_factor"],
+        "ms_over_ps_time_ratio": ms["pipeline_s"] / ps["pipeline_s"],
+        "cold_cli_s": cli[1][0], "first_cold_cli_s": cli[0][0],
+        "peak_rss_mb": max(rss for _, rss in cli), "benchmark_process_rss_mb": own_rss,
+        "walk_s": ms["walked_s"], "modes": rows,
+        "machine": {"cpu_count": os.cpu_count(), "pinned_to_one_cpu": not args.all_cores, "python": sys.version.split()[0]},
+    }
+    print(_table(rows, cli))
+    print(f"\nmultiple shooting / plain shooting time: {result['ms_over_ps_time_ratio']:.2f}; "
+          f"benchmark process peak RSS {own_rss:.0f} MB")
+    for key, op, bound in TARGETS:
+        value = result[key]
+        held = value >= bound if op == ">=" else value <= bound
+        print(f"target {key} {op} {bound:g}: {value:.3g} {'holds' if held else 'MISSED'}")
+    if args.json:
+        print(json.dumps(result))
+
+
+if __name__ == "__main__":
+    main()
