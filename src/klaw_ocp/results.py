@@ -38,14 +38,17 @@ def _rows_for_step(step, body) -> list[dict]:
                 "hip_x": hip[0], "hip_y": hip[1],
                 "F_w": forces[0], "F_theta1": forces[1], "F_theta2": forces[2], "pa": forces[3]}
 
-    stance_hip_xy = stance_hips(body, stance.states, ankle)[0]
+    # the stance state rides along in the swing states: every hip of the step in one call
+    sizes = [len(sub.states) for sub in step.subphases]
+    all_hips = np.split(stance_hips(body, np.vstack([sub.states[:, :6] for sub in step.subphases]), ankle)[0],
+                        np.cumsum(sizes)[:-1])
+    stance_hip_xy = all_hips[0]
     for k in range(len(ds["t"]) - 1):          # the toe-off node opens swing1
         row = base(ds["t"][k], "double_support", stance.states[k], stance.forces[k], stance_hip_xy[k])
         row.update(theta3=ds["theta3"][k], theta4=ds["theta4"][k], theta3d=rates3[k], theta4d=rates4[k],
                    F_theta3=float("nan"), F_theta4=float("nan"))
         rows.append(row)
-    for sub in step.subphases[1:]:
-        hips = stance_hips(body, sub.states, ankle)[0]   # the stance state rides along in the swing
+    for sub, hips in zip(step.subphases[1:], all_hips[1:]):
         for k in range(len(sub.t)):
             if sub.name != "swing1" and k == 0:
                 continue                          # same instant as the previous subphase's end
@@ -88,8 +91,9 @@ def hip_dip(body, stance) -> float:
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 
-def walk_summary(walk) -> dict:
-    """The JSON-ready summary: status, method, body, timing and per-step subphase results."""
+def walk_summary(walk, table: dict | None = None) -> dict:
+    """The JSON-ready summary: status, method, body, timing and per-step subphase results
+    (``table``: the walk's :func:`walk_table`, when the caller has it already)."""
     steps = []
     for step in walk.steps:
         entry = step.plan.as_dict()
@@ -104,7 +108,7 @@ def walk_summary(walk) -> dict:
             "build_s": float(s.build_s),
         } for s in step.subphases]
         steps.append(entry)
-    hip = walk_table(walk) if walk.steps else None
+    hip = (table if table is not None else walk_table(walk)) if walk.steps else None
     spec = walk.spec
     return {
         "name": spec.name, "status": walk.status, "message": walk.message, "method": spec.method,
