@@ -17,3 +17,18 @@ def fail_at_step(monkeypatch):
             return original(self, plan, inp, k, at_rest)
         monkeypatch.setattr(StepController, "solve_step", failing)
     return arm
+
+
+@pytest.fixture(scope="session", autouse=True)
+def fresh_kernel_cache(tmp_path_factory):
+    """Every test session compiles the solver kernels it needs into a cache of its own: the
+    compile path runs on every machine the suite runs on, and no test depends on a cache left by
+    an earlier run (klaw_ocp.solvers.kernels)."""
+    import os
+    previous = os.environ.get("KLAW_OCP_CACHE_DIR")
+    os.environ["KLAW_OCP_CACHE_DIR"] = str(tmp_path_factory.mktemp("kernel-cache"))
+    yield
+    if previous is None:
+        os.environ.pop("KLAW_OCP_CACHE_DIR", None)
+    else:
+        os.environ["KLAW_OCP_CACHE_DIR"] = previous

@@ -185,14 +185,20 @@ class KernelLibrary:
                 raise ValueError(f"kernel library built {tuple(self._functions)}, expected {self.names}")
         return self._functions
 
-    def _load(self) -> Optional[ctypes.CDLL]:
+    def library_path(self) -> Optional[Path]:
+        """Where this library is cached with the current compiler (None: no compiler)."""
         cc = compiler()
         if cc is None:
             return None
         digest = self._digest.copy()
         digest.update(" ".join([_compiler_identity(cc), *FLAGS]).encode())
-        folder = cache_dir()
-        path = folder / f"{digest.hexdigest()[:32]}.so"
+        return cache_dir() / f"{digest.hexdigest()[:32]}.so"
+
+    def _load(self) -> Optional[ctypes.CDLL]:
+        path = self.library_path()
+        if path is None:
+            return None
+        cc, folder = compiler(), path.parent
         if path.exists():
             try:
                 lib = ctypes.CDLL(str(path))

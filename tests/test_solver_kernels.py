@@ -1,0 +1,237 @@
+"""The compiled solver kernels (issue #9): the same numbers as CasADi's own evaluation and AD, a
+disk cache that is safe to share between processes, and a walk that runs without a compiler."""
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from klaw_ocp.config import load_config
+from klaw_ocp.solvers import MultipleShootingSolver, integrator, ipopt_nlp, kernels
+from klaw_ocp.solvers.integrator import SubphaseKernels, interval_function, subphase_kernels
+from klaw_ocp.walk import simulate_walk, walk_spec
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def problems():
+    """One real problem of each subphase: the first two steps of the natural walk."""
+    captured = {}
+    original = MultipleShootingSolver.solve
+
+    def spy(self, pb):
+        captured.setdefault(pb.spec.name, pb)
+        return original(self, pb)
+    MultipleShootingSolver.solve = spy
+    try:
+        spec = walk_spec(load_config(ROOT / "configs" / "natural_walk.yaml"))
+        simulate_walk(replace(spec, plans=spec.plans[:2]))
+    finally:
+        MultipleShootingSolver.solve = original
+    return captured
+
+
+def _points(pb, k):
+    """The problem's guess simulated: realistic interval start states."""
+    n = pb.grid.size - 1
+    xs = k.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), pb.guess, pb.context)[0].reshape(n, -1)
+    return np.vstack([pb.x0, xs[:-1]])
+
+
+@pytest.mark.parametrize("name", ["stance", "swing1", "swing2", "swing3"])
+def test_interval_sensitivities_are_the_derivative_of_the_interval(problems, name):
+    """The sens kernel propagates the variational equations through the RK4 stages: it must equal
+    CasADi's AD of the whole RK4 interval, block for block."""
+    pb = problems[name]
+    spec, k = pb.spec, subphase_kernels(pb.spec, 4, pb.grid.size - 1)
+    starts, t, h = _points(pb, k), pb.grid[:-1], np.diff(pb.grid)
+    xf, jac = k.sens(starts, t, h, pb.guess, pb.context)
+    n, nx, nu = len(t), spec.nx, spec.nu
+    jac = jac.reshape(n, nx + nu, nx).transpose(0, 2, 1)
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    ts, hs, cs = ca.SX.sym("t"), ca.SX.sym("h"), ca.SX.sym("c", spec.nc)
+    out = interval_function(spec, 4)(x, ts, hs, u, cs)
+    reference = ca.Function("ref", [x, ts, hs, u, cs], [out, ca.jacobian(out, ca.vertcat(x, u))])
+    for i in (0, n // 2, n - 1):
+        ref_x, ref_j = (np.asarray(v) for v in reference(starts[i], t[i], h[i], pb.guess, pb.context))
+        np.testing.assert_allclose(xf.reshape(n, nx)[i], ref_x.ravel(), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(jac[i], ref_j, rtol=1e-9, atol=1e-9 * np.abs(ref_j).max())
+
+
+def test_compiled_and_casadi_evaluation_agree(problems, monkeypatch):
+    """Without a compiler the same kernels are evaluated by CasADi: same numbers to round-off."""
+    pb = problems["swing2"]
+    compiled = subphase_kernels(pb.spec, 4, pb.grid.size - 1)
+    assert compiled.library.compiled, "a C compiler is part of the test environment"
+    monkeypatch.setenv("KLAW_OCP_JIT", "0")
+    plain = SubphaseKernels(pb.spec, 4, pb.grid.size - 1)
+    starts, t, h = _points(pb, compiled), pb.grid[:-1], np.diff(pb.grid)
+    args = {"sim": (pb.x0, t, h, pb.guess, pb.context), "prop": (starts, t, h, pb.guess, pb.context),
+            "sens": (starts, t, h, pb.guess, pb.context), "final": (starts[-1], pb.context),
+            "nodes": (np.vstack([starts, starts[-1]]), pb.grid, pb.guess, pb.context)}
+    for name, a in args.items():
+        for c_out, p_out in zip(getattr(compiled, name)(*a), getattr(plain, name)(*a)):
+            np.testing.assert_allclose(c_out, p_out, rtol=1e-11, atol=1e-11, err_msg=name)
+    assert not plain.library.compiled
+
+
+def test_ipopt_constraint_jacobian_equals_ad(problems):
+    """IPOPT's Jacobian, assembled from the per-interval blocks, is CasADi's AD of the constraints."""
+    pb = problems["swing2"]
+    spec, n = pb.spec, pb.grid.size - 1
+    nlp, _, jac_g, _ = ipopt_nlp._build(spec, n, 4, compiling=False)
+    z, p = ca.MX.sym("z", nlp.size1_in(0)), ca.MX.sym("p", nlp.size1_in(1))
+    ad = ca.Function("ad", [z, p], [ca.jacobian(nlp(z, p)[1], z)])
+    k = subphase_kernels(spec, 4, n)
+    xs = k.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), pb.guess, pb.context)[0]
+    z0 = np.concatenate([xs, pb.guess])
+    p0 = np.concatenate([pb.x0, pb.grid, pb.context, pb.guess, pb.scale, np.ones(spec.nu)])
+    expected, got = np.asarray(ca.densify(ad(z0, p0))), np.asarray(ca.densify(jac_g(z0, p0)[1]))
+    np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
+
+
+def _tiny_library(tmp_cache, counter, tag="a"):
+    def build(compiling):
+        counter.append(compiling)
+        x = ca.SX.sym("x", 3)
+        return [ca.Function("tiny_square", [x], [x ** 2]), ca.Function("tiny_sum", [x], [ca.sum1(x)])]
+    return kernels.KernelLibrary(["tiny", tag], ["tiny_square", "tiny_sum"], build)
+
+
+def test_cache_hit_builds_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    calls = []
+    first = _tiny_library(tmp_path, calls).functions()
+    assert calls == [True]
+    np.testing.assert_array_equal(first["tiny_square"]([1.0, 2.0, 3.0])[0], [1.0, 4.0, 9.0])
+    library = _tiny_library(tmp_path, calls)
+    assert library.functions()["tiny_sum"]([1.0, 2.0, 3.0])[0][0] == 6.0
+    assert calls == [True], "a cache hit must not build the CasADi functions again"
+    assert (library.path.stat().st_mode & 0o777) == 0o755
+    other = _tiny_library(tmp_path, calls, tag="b")
+    other.load()
+    assert other.path != library.path, "other key parts, another library"
+    assert not list(tmp_path.rglob(".build-*")), "no temporary build folder left behind"
+
+
+def test_a_damaged_library_is_rebuilt(tmp_path, monkeypatch):
+    """A cached file that does not load (truncated, or from another machine sharing the folder)
+    is compiled again. It is damaged here before this process ever loaded it: a library in use
+    is never written in place, a new one is renamed over it."""
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    calls = []
+    library = _tiny_library(tmp_path, calls, tag="damaged")
+    path = library.library_path()
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"not a shared library")
+    assert library.functions()["tiny_sum"]([1.0, 1.0, 1.0])[0][0] == 3.0
+    assert library.compiled and library.path == path and calls == [True]
+
+
+def test_processes_may_build_the_same_library_at_once(tmp_path):
+    script = textwrap.dedent("""
+        import casadi as ca, sys
+        from klaw_ocp.solvers.kernels import KernelLibrary
+        def build(compiling):
+            x = ca.SX.sym("x", 4)
+            return [ca.Function("race", [x], [ca.sin(x) * ca.cos(x) + x ** 3])]
+        lib = KernelLibrary(["race"], ["race"], build)
+        out = lib.functions()["race"]([0.1, 0.2, 0.3, 0.4])[0]
+        assert lib.compiled
+        print(repr(out.tolist()))
+    """)
+    env = dict(os.environ, KLAW_OCP_CACHE_DIR=str(tmp_path))
+    procs = [subprocess.Popen([sys.executable, "-c", script], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) for _ in range(4)]
+    outputs = [p.communicate(timeout=300) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [err for _, err in outputs]
+    assert len({out for out, _ in outputs}) == 1
+    assert len(list(tmp_path.rglob("*.so"))) == 1
+    assert not list(tmp_path.rglob(".build-*"))
+
+
+def test_a_failing_compiler_falls_back_to_casadi_with_a_warning(tmp_path, monkeypatch):
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", "false")
+    monkeypatch.setattr(kernels, "_compiler_state", {})
+    calls = []
+    library = _tiny_library(tmp_path, calls, tag="no-cc")
+    with pytest.warns(RuntimeWarning, match="compiling solver kernels failed"):
+        fns = library.functions()
+    assert not library.compiled and calls == [True, False]
+    np.testing.assert_array_equal(fns["tiny_square"]([1.0, -2.0, 0.5])[0], [1.0, 4.0, 0.25])
+
+
+def test_a_walk_without_a_compiler_is_the_same_walk(monkeypatch):
+    """KLAW_OCP_JIT=0 (or no compiler): every kernel and IPOPT's functions evaluated by CasADi."""
+    spec = walk_spec(load_config(ROOT / "configs" / "natural_walk.yaml"))
+    spec = replace(spec, plans=spec.plans[:3])
+    results = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("KLAW_OCP_JIT", jit)
+        integrator.subphase_kernels.cache_clear()
+        ipopt_nlp.ipopt_solver.cache_clear()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")   # no compile attempt, no warning
+            results[jit] = [simulate_walk(replace(spec, method=m, stance=s))
+                            for m, s in (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"),
+                                         ("multiple-shooting", "tracking"))]
+    integrator.subphase_kernels.cache_clear()
+    ipopt_nlp.ipopt_solver.cache_clear()
+    for compiled, plain in zip(results["1"], results["0"]):
+        for a, b in zip(compiled.steps, plain.steps):
+            for sa, sb in zip(a.subphases, b.subphases):
+                for key, value in sa.parameters.items():
+                    assert sb.parameters[key] == pytest.approx(value, rel=1e-7, abs=1e-9), (sa.name, key)
+
+
+def test_condensed_newton_step_is_the_full_newton_step(problems):
+    """Condensing is block elimination: its step must solve the whole multiple-shooting Jacobian."""
+    from klaw_ocp.solvers.newton import CondensedNewton
+    pb = problems["stance"]
+    k = subphase_kernels(pb.spec, 4, pb.grid.size - 1)
+    newton = CondensedNewton(k, 1e-10, 50)
+    n, nx = k.intervals, pb.spec.nx
+    free = [i for i, fixed in enumerate(pb.fixed) if not fixed]
+    t, h = pb.grid[:-1], np.diff(pb.grid)
+    rng = np.random.default_rng(3)
+    X = _points(pb, k)[1:]
+    X = np.vstack([X, X[-1]]) + 1e-3 * rng.standard_normal((n, nx))   # defects and final conditions off
+    d, g, G = newton._residual(pb.x0, t, h, pb.guess, pb.context, X, 0.0)
+    lin, _ = newton._linearise(pb.x0, t, h, pb.guess, pb.context, X, tuple(free), G)
+    dX, du = newton._step(lin, d, g)
+    jac = np.zeros((n * nx + len(g), n * nx + len(free)))
+    for i in range(n):
+        jac[i * nx:(i + 1) * nx, i * nx:(i + 1) * nx] = np.eye(nx)
+        if i:
+            jac[i * nx:(i + 1) * nx, (i - 1) * nx:i * nx] = -lin.A[i]
+        jac[i * nx:(i + 1) * nx, n * nx:] = -lin.B[i]
+    jac[n * nx:, (n - 1) * nx:n * nx] = G
+    full = np.linalg.solve(jac, -np.concatenate([d.ravel(), g]))
+    np.testing.assert_allclose(np.concatenate([dX.ravel(), du]), full, rtol=1e-8, atol=1e-12)
+
+
+def test_chord_steps_reach_the_root_of_fresh_newton(problems):
+    """A solve that starts from another problem's Jacobian (the chord) converges to the same root,
+    to the tolerance, as one that evaluates its own."""
+    from klaw_ocp.solvers.newton import CondensedNewton
+    pb = problems["swing1"]
+    k = subphase_kernels(pb.spec, 4, pb.grid.size - 1)
+    n = k.intervals
+    t, h = pb.grid[:-1], np.diff(pb.grid)
+    start = k.sim(pb.x0, t, h, pb.guess, pb.context)[0].reshape(n, -1)
+    fresh = CondensedNewton(k, 1e-12, 50).solve(pb.x0, pb.grid, pb.guess, [0], pb.context, start)
+    chord = CondensedNewton(k, 1e-12, 50)
+    nearby = pb.context * (1 + 1e-3)          # a neighbouring step's problem seeds the Jacobian
+    chord.solve(pb.x0, pb.grid, pb.guess, [0], nearby, start)
+    again = chord.solve(pb.x0, pb.grid, pb.guess, [0], pb.context, start)
+    assert fresh.success and again.success and again.jacobians <= 1 < fresh.jacobians + again.jacobians
+    assert again.u[0] == pytest.approx(fresh.u[0], rel=1e-8)
+    np.testing.assert_allclose(again.states, fresh.states, atol=1e-9)
