@@ -81,17 +81,33 @@ REACH_FRACTION = 1 - 1e-3
 
 
 def reach_pitch(body: Body, hip: np.ndarray, metatarsal_x: float) -> float:
-    """Smallest foot pitch at which the leg reaches the ankle (0 if it reaches it flat)."""
+    """Smallest foot pitch at which the leg reaches the ankle (0 if it reaches it flat).
+
+    The pitched ankle moves on a circle of radius l12 about the metatarsal head, so the pitch
+    where it is l1·REACH_FRACTION from the hip is a circle intersection, in closed form (the
+    double support asks this at every node of every step)."""
     hx, hy = float(hip[0]), float(hip[1])
+    radius = body.l1 * REACH_FRACTION
 
     def reach(p):
         ax, ay = _hind_ankle(body, metatarsal_x, p)
-        return math.hypot(ax - hx, ay - hy) - body.l1 * REACH_FRACTION
+        return math.hypot(ax - hx, ay - hy) - radius
+    limit = math.radians(89)
     if reach(0.0) <= 0:
         return 0.0
-    if reach(math.radians(89)) > 0:
-        return math.radians(89)
-    return root(reach, 0.0, math.radians(89), xtol=1e-15)
+    if reach(limit) > 0:
+        return limit
+    # ankle(p) = M + l12 (cos(phi0 - p), sin(phi0 - p)); |ankle - H| = R  <=>  D . e(phi) = K
+    dx, dy = metatarsal_x - hx, -hy
+    dist, phi0 = math.hypot(dx, dy), math.atan2(body.l9, -metatarsal_offset(body))
+    k = (radius ** 2 - dist ** 2 - body.l12 ** 2) / (2 * body.l12)
+    if dist > 0 and abs(k) <= dist:
+        psi, spread = math.atan2(dy, dx), math.acos(k / dist)
+        pitches = [math.remainder(phi0 - psi - sign * spread, 2 * math.pi) for sign in (1.0, -1.0)]
+        inside = [p for p in pitches if 0.0 <= p <= limit]
+        if inside:   # reach > 0 at 0 and <= 0 at the limit: one crossing in between
+            return min(inside)
+    return root(reach, 0.0, limit, xtol=1e-15)
 
 
 #: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at

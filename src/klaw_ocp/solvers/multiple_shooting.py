@@ -80,8 +80,9 @@ class MultipleShootingSolver:
     def _final(self, pb: SubphaseProblem, kernels):
         return lambda xs: kernels.final(xs[-1], pb.context)[0]
 
-    def _initial_guess(self, pb: SubphaseProblem, free: list, call: _Call, kernels) -> tuple[np.ndarray, np.ndarray]:
-        """Free parameters and node states to start Newton from.
+    def _initial_guess(self, pb: SubphaseProblem, free: list, call: _Call, kernels) -> tuple:
+        """Free parameters, node states to start Newton from, and whether those nodes are the
+        simulation of those parameters (then their continuity defects are zero).
 
         A simulation with the given guess initialises the nodes. When its final conditions are
         far off (a cold start), a few damped Newton steps on the single-shooting residual
@@ -90,7 +91,7 @@ class MultipleShootingSolver:
         """
         u = pb.guess.copy()
         if self._warm(pb):
-            return u, np.asarray(pb.state_guess)[1:]
+            return u, np.asarray(pb.state_guess)[1:], False
         final = self._final(pb, kernels)
         xs = self._simulate(pb, u, kernels)
         res = final(xs)
@@ -118,7 +119,8 @@ class MultipleShootingSolver:
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
             call.note("bracket")
             u, xs = self._bracket_guess(pb, free[0], u, kernels)
-        return u, np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))
+        finite = bool(np.all(np.isfinite(xs)))
+        return u, (xs if finite else np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))), finite
 
     def _warm(self, pb: SubphaseProblem) -> bool:
         """Whether the problem carries node states to start from (the previous step's solution)."""
@@ -192,9 +194,9 @@ class MultipleShootingSolver:
         spec = pb.spec
         kernels = self._kernels(pb, call)
         free = [i for i, fixed in enumerate(pb.fixed) if not fixed]
-        u0, xs0 = self._initial_guess(pb, free, call, kernels)
+        u0, xs0, simulated = self._initial_guess(pb, free, call, kernels)
         newton = self._newton_for(pb, kernels)
-        sol = newton.solve(pb.x0, pb.grid, u0, free, pb.context, xs0)
+        sol = newton.solve(pb.x0, pb.grid, u0, free, pb.context, xs0, simulated=simulated)
         result = self._finish(pb, sol.states, sol.u, sol.iterations, call, "", sol.success, kernels,
                               residual=sol.residual)
         if not result.success and len(free) == 1:
@@ -229,7 +231,7 @@ class MultipleShootingSolver:
         g0 = self._final(pb, kernels)(xs)
         u = u0
         for lam in np.linspace(1 / stages, 1.0, stages):
-            sol = newton.solve(pb.x0, pb.grid, u, free, pb.context, xs, (1 - lam) * g0)
+            sol = newton.solve(pb.x0, pb.grid, u, free, pb.context, xs, (1 - lam) * g0, simulated=lam == 1 / stages)
             iterations += sol.iterations
             if not sol.success:
                 return None
@@ -244,7 +246,7 @@ class MultipleShootingSolver:
         if start is not None and np.all(np.isfinite(start.states)):
             u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
-            u0, xs0 = self._initial_guess(pb, [], call, kernels)
+            u0, xs0, _ = self._initial_guess(pb, [], call, kernels)
         z0 = np.concatenate([xs0.ravel(), u0])
         # an optimised formulation is judged by its cost alone; otherwise stay near the nominal unknowns
         weights = np.array([1.0 if f and spec.residuals is None else 0.0 for f in pb.fixed])
