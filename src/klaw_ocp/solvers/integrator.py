@@ -5,6 +5,9 @@ interval), so where they solve the same square problem they find the same torque
 solver tolerance: the comparison then measures the solvers, not two discretisations. The
 interval Function takes its start time and length as inputs, so one Function serves every grid,
 and a partial interval (an event inside it) is the same call with a shorter ``h``.
+
+:class:`SubphaseKernels` are the interval and what the solvers need around it, compiled once per
+machine (:mod:`.kernels`, docs/performance.md).
 """
 from __future__ import annotations
 
@@ -14,32 +17,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .kernels import KernelLibrary, source_key
 from .problem import SubphaseSpec
-
-
-@lru_cache(maxsize=None)
-def interval_function(spec: SubphaseSpec, substeps: int) -> ca.Function:
-    """``(x, t, h, u, c) -> x(t + h)`` by ``substeps`` RK4 steps; SX, built once per spec."""
-    x = ca.SX.sym("x", spec.nx)
-    t, h = ca.SX.sym("t"), ca.SX.sym("h")
-    u, c = ca.SX.sym("u", spec.nu), ca.SX.sym("c", spec.nc)
-    dt = h / substeps
-    xk, tk = x, t
-    for _ in range(substeps):
-        k1 = spec.rhs(xk, tk, u, c)
-        k2 = spec.rhs(xk + dt / 2 * k1, tk + dt / 2, u, c)
-        k3 = spec.rhs(xk + dt / 2 * k2, tk + dt / 2, u, c)
-        k4 = spec.rhs(xk + dt * k3, tk + dt, u, c)
-        xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        tk = tk + dt
-    return ca.Function(f"{spec.name}_rk4_{substeps}", [x, t, h, u, c], [xk], ["x", "t", "h", "u", "c"], ["xf"])
-
-
-@lru_cache(maxsize=None)
-def trajectory_function(spec: SubphaseSpec, substeps: int, intervals: int) -> ca.Function:
-    """``(x0, t[N], h[N], u, c) -> X[nx, N]``: the states at nodes 1..N, one call per shot."""
-    step = interval_function(spec, substeps)
-    return step.mapaccum(f"{spec.name}_traj_{substeps}_{intervals}", intervals, ["x"], ["xf"])
 
 
 class SubphaseKernels:
@@ -62,7 +41,6 @@ class SubphaseKernels:
     NAMES = ("sim", "prop", "sens", "step", "final", "nodes", "events")
 
     def __init__(self, spec: SubphaseSpec, substeps: int, intervals: int):
-        from .kernels import KernelLibrary, source_key
         self.spec, self.substeps, self.intervals = spec, int(substeps), int(intervals)
         parts = [source_key(sys.modules[__name__]), spec.name, spec.nx, spec.nu, spec.nc, self.substeps, self.intervals]
         for fn in (spec.rhs, spec.final, spec.outputs, spec.path, spec.plausible, *(e.fn for e in spec.events)):
@@ -70,10 +48,14 @@ class SubphaseKernels:
         self.library = KernelLibrary(parts, [f"{spec.name}_{n}" for n in self.NAMES], self._build)
         self._fns = None
 
+    def load(self) -> None:
+        """Compile or load the kernels now (the first use does it otherwise)."""
+        if self._fns is None:
+            self._fns = self.library.functions()
+
     def __getattr__(self, name):
         if name in SubphaseKernels.NAMES:
-            if self._fns is None:
-                self._fns = self.library.functions()
+            self.load()
             return self._fns[f"{self.spec.name}_{name}"]
         raise AttributeError(name)
 
