@@ -33,56 +33,46 @@ from .problem import SubphaseSpec
 NAMES = ("nlp", "grad_f", "jac_g", "hess_lag")
 
 
-def _block_jacobian(spec: SubphaseSpec, n: int, blocks: dict) -> tuple[ca.Sparsity, list]:
-    """The constraint Jacobian's sparsity and the source of each of its nonzeros, from dense
-    blocks: ``blocks[name] = (rows, cols, values)`` with ``values`` an (len(rows), len(cols))
-    column-major MX block. Returns (sparsity, [MX pieces]) whose concatenation, permuted, gives
-    the nonzeros in CasADi's compressed-column order."""
-    rows, cols, order = [], [], []
-    offset = 0
-    for r, c in blocks.values():
+def _sparse_from_blocks(blocks: list, n_rows: int, n_cols: int) -> ca.MX:
+    """A sparse MX matrix from dense blocks ``(rows, cols, value)``: ``value`` is a
+    (len(rows), len(cols)) MX or DM placed at those row and column indices (blocks do not overlap).
+    The nonzeros are gathered once, in CasADi's compressed-column order."""
+    rows, cols, pieces = [], [], []
+    for r, c, value in blocks:
         rr, cc = np.meshgrid(r, c, indexing="ij")
-        rows.append(rr.ravel(order="F")); cols.append(cc.ravel(order="F"))
-        order.append(offset + np.arange(rr.size))
-        offset += rr.size
-    rows, cols, order = np.concatenate(rows), np.concatenate(cols), np.concatenate(order)
-    perm = np.lexsort((rows, cols))
-    return rows[perm], cols[perm], order[perm]
+        rows.append(rr.ravel(order="F"))          # column-major, as ca.vec orders the value
+        cols.append(cc.ravel(order="F"))
+        pieces.append(ca.vec(value))
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    order = np.lexsort((rows, cols))
+    colind = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=n_cols))])
+    nonzeros = ca.vertcat(*pieces)[order.tolist()]
+    return ca.MX(ca.Sparsity(n_rows, n_cols, colind.tolist(), rows[order].tolist()), nonzeros)
 
 
-def _constraint_jacobian(spec, n, A_B, G, path_x, path_u, n_rows, n_z):
+def _constraint_jacobian(spec, n, A_B, G, path_x, path_u, n_rows, n_z) -> ca.MX:
     """d g / d z assembled from the per-interval Jacobians (the block structure of multiple
-    shooting) instead of CasADi's AD of the whole transcription (2 ms an evaluation here)."""
-    nx, nu = spec.nx, spec.nu
+    shooting) instead of CasADi's AD of the whole transcription (2 ms an evaluation here).
+    Rows: the defects X_{k+1} - Phi(X_k, u), the final conditions, then each path function at
+    nodes 0..N; columns: X_1..X_N, u."""
+    nx, nu, nf = spec.nx, spec.nu, G.size1()
     u_cols = np.arange(n * nx, n * nx + nu)
-    values, blocks = [], {}
-    for k in range(n):   # defect k: X_{k+1} - Phi(X_k, u)
+    node_cols = lambda k: np.arange((k - 1) * nx, k * nx)     # the columns of X_k, k >= 1
+    blocks = []
+    for k in range(n):
         rows_k = np.arange(k * nx, (k + 1) * nx)
-        blocks[f"I{k}"] = (rows_k, np.arange(k * nx, (k + 1) * nx))
-        values.append(ca.DM.eye(nx))
         jac_k = A_B[:, k * (nx + nu):(k + 1) * (nx + nu)]
-        if k > 0:
-            blocks[f"A{k}"] = (rows_k, np.arange((k - 1) * nx, k * nx))
-            values.append(-jac_k[:, :nx])
-        blocks[f"B{k}"] = (rows_k, u_cols)
-        values.append(-jac_k[:, nx:])
-    nf = G.size1()
-    blocks["G"] = (np.arange(n * nx, n * nx + nf), np.arange((n - 1) * nx, n * nx))
-    values.append(G)
-    if path_x is not None:
-        nh = path_x.size1()
-        for i in range(nh):
-            for k in range(1, n + 1):   # node 0 is x0, a parameter
-                row = np.array([n * nx + nf + i * (n + 1) + k])
-                blocks[f"Px{i}_{k}"] = (row, np.arange((k - 1) * nx, k * nx))
-                values.append(path_x[i, k * nx:(k + 1) * nx])
-            blocks[f"Pu{i}"] = (n * nx + nf + i * (n + 1) + np.arange(n + 1), u_cols)
-            values.append(ca.reshape(path_u[i, :], nu, n + 1).T)
-    rows, cols, order = _block_jacobian(spec, n, blocks)
-    nz = ca.vertcat(*[ca.vec(v) for v in values])[order.tolist()]
-    counts = np.bincount(cols, minlength=n_z)
-    colind = np.concatenate([[0], np.cumsum(counts)]).tolist()
-    return ca.MX(ca.Sparsity(n_rows, n_z, colind, rows.tolist()), nz)
+        blocks.append((rows_k, node_cols(k + 1), ca.DM.eye(nx)))
+        if k > 0:                                              # X_0 = x0 is a parameter
+            blocks.append((rows_k, node_cols(k), -jac_k[:, :nx]))
+        blocks.append((rows_k, u_cols, -jac_k[:, nx:]))
+    blocks.append((np.arange(n * nx, n * nx + nf), node_cols(n), G))
+    for i in range(path_x.size1() if path_x is not None else 0):
+        first = n * nx + nf + i * (n + 1)
+        for k in range(1, n + 1):
+            blocks.append((np.array([first + k]), node_cols(k), path_x[i, k * nx:(k + 1) * nx]))
+        blocks.append((first + np.arange(n + 1), u_cols, ca.reshape(path_u[i, :], nu, n + 1).T))
+    return _sparse_from_blocks(blocks, n_rows, n_z)
 
 
 def _build(spec: SubphaseSpec, n: int, substeps: int, compiling: bool) -> list:

@@ -191,7 +191,6 @@ class MultipleShootingSolver:
         return self._newton[pb.spec]
 
     def _solve_square(self, pb: SubphaseProblem, call: _Call) -> SubphaseSolution:
-        spec = pb.spec
         kernels = self._kernels(pb, call)
         free = [i for i, fixed in enumerate(pb.fixed) if not fixed]
         u0, xs0, simulated = self._initial_guess(pb, free, call, kernels)
