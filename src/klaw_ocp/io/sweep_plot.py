@@ -141,7 +141,7 @@ def sweep_figure(rows: list[dict], varied_paths: list[str], title: str | None = 
     handles = [Line2D([], [], marker="s", ls="", color="#3b8f88", markeredgecolor="0.2", label="converged"),
                Line2D([], [], marker="x", ls="", color=_FAIL_COLOUR, markeredgewidth=2.2,
                       label="failed / error"),
-               Line2D([], [], ls="", label="(wall time: the first walk in each process includes the CasADi build)")]
+               Line2D([], [], ls="", label="(wall time: the first walk in each process includes loading the solver kernels)")]
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False,
                handletextpad=0.3, columnspacing=1.5)
     n = {status: sum(r["status"] == status for r in rows) for status in ("ok", "failed", "error")}
