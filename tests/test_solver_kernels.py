@@ -242,3 +242,21 @@ def test_chord_steps_reach_the_root_of_fresh_newton(problems):
     assert fresh.success and again.success and again.jacobians <= 1 < fresh.jacobians + again.jacobians
     assert again.u[0] == pytest.approx(fresh.u[0], rel=1e-8)
     np.testing.assert_allclose(again.states, fresh.states, atol=1e-9)
+
+
+@requires_compiler
+def test_prepare_compiles_every_subphase_at_once(tmp_path, monkeypatch):
+    """A walk's first solver call compiles the kernels of all four subphases in parallel threads
+    (CasADi's symbolic work one thread at a time): each ends up compiled, each in its own library."""
+    from klaw_ocp.control.stance_spec import stance_spec
+    from klaw_ocp.control.swing_spec import swing_specs
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    integrator.subphase_kernels.cache_clear()
+    specs = [stance_spec("momentum", False), *swing_specs("momentum").values()]
+    try:
+        MultipleShootingSolver().prepare(specs)
+        libraries = [subphase_kernels(spec, 4, 20).library for spec in specs]
+        assert all(lib.compiled for lib in libraries)
+        assert len({lib.path for lib in libraries}) == 4 == len(list(tmp_path.rglob("*.so")))
+    finally:
+        integrator.subphase_kernels.cache_clear()

@@ -93,6 +93,8 @@ class StepController:
         self.tracking = stance_formulation == "tracking"
         self.n = solver.intervals
         self.swing_specs = swing_specs(lock_rule)
+        # the first walk on a machine compiles these kernels: all at once, on every core
+        solver.prepare([stance_spec(lock_rule, False), *self.swing_specs.values()])
         self.guesses: dict = {}
         self.previous_states: dict = {}
         weight = body.mass * body.g

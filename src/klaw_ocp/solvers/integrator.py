@@ -17,7 +17,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .kernels import KernelLibrary, source_key
+from .kernels import KernelLibrary, prefetch, source_key
 from .problem import SubphaseSpec
 
 
@@ -142,6 +142,11 @@ def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.F
         tk = tk + dt
     outputs = [xk, S] if sensitivities else [xk]
     return ca.Function(f"{spec.name}_rk4_{substeps}{'_sens' if sensitivities else ''}", [x, t, h, u, c], outputs)
+
+
+def prepare_kernels(specs, substeps: int, intervals: int) -> None:
+    """Compile or load the kernels of ``specs`` now, in parallel (:func:`.kernels.prefetch`)."""
+    prefetch([subphase_kernels(spec, substeps, intervals).load for spec in specs])
 
 
 @lru_cache(maxsize=None)

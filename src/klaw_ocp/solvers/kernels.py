@@ -47,7 +47,9 @@ import numpy as np
 GENERATOR_VERSION = "1"
 FLAGS = ("-O1", "-fPIC", "-shared")
 _DISABLED = ("0", "off", "false", "no")
-_lock = threading.Lock()
+#: CasADi expressions are built and code is generated one thread at a time (CasADi's symbolic
+#: layer is not thread-safe); compilers run in parallel (:func:`prefetch`)
+_casadi_lock = threading.RLock()
 _compiler_state: dict = {}
 
 
@@ -175,15 +177,17 @@ class KernelLibrary:
                           part.encode() if isinstance(part, str) else part)
             digest.update(b"\0")
         self._digest = digest
+        self._lock = threading.Lock()
         self.path: Optional[Path] = None
         self.compiled = False
 
     def _casadi_functions(self, compiling: bool = False) -> dict:
-        if self._functions is None:
-            self._functions = {fn.name(): fn for fn in self._build(compiling)}
-            if tuple(self._functions) != self.names:
-                raise ValueError(f"kernel library built {tuple(self._functions)}, expected {self.names}")
-        return self._functions
+        with _casadi_lock:
+            if self._functions is None:
+                self._functions = {fn.name(): fn for fn in self._build(compiling)}
+                if tuple(self._functions) != self.names:
+                    raise ValueError(f"kernel library built {tuple(self._functions)}, expected {self.names}")
+            return self._functions
 
     def library_path(self) -> Optional[Path]:
         """Where this library is cached with the current compiler (None: no compiler)."""
@@ -222,10 +226,11 @@ class KernelLibrary:
     def _compile(self, cc: str, folder: Path, path: Path) -> None:
         with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
             source = Path(tmp) / "kernels.c"
-            generator = ca.CodeGenerator(source.name, {"with_header": False})
-            for fn in self._casadi_functions(compiling=True).values():
-                generator.add(fn)
-            generator.generate(tmp + os.sep)
+            with _casadi_lock:
+                generator = ca.CodeGenerator(source.name, {"with_header": False})
+                for fn in self._casadi_functions(compiling=True).values():
+                    generator.add(fn)
+                generator.generate(tmp + os.sep)
             built = Path(tmp) / "kernels.so"
             result = subprocess.run([cc, *FLAGS, str(source), "-o", str(built), "-lm"],
                                     capture_output=True, text=True, timeout=900)
@@ -236,7 +241,7 @@ class KernelLibrary:
 
     def load(self) -> Optional[ctypes.CDLL]:
         """Compile or load the library once (None: evaluate with CasADi)."""
-        with _lock:
+        with self._lock:
             if not hasattr(self, "_lib"):
                 self._lib = self._load()
                 self.compiled = self._lib is not None
@@ -254,3 +259,15 @@ class KernelLibrary:
         if self.load() is not None:
             return ca.external(name, str(self.path))
         return self._casadi_functions()[name]
+
+
+def prefetch(loaders: Sequence[Callable[[], object]]) -> None:
+    """Run ``loaders`` (each compiles or loads a library) in parallel threads: the first run on a
+    machine compiles its kernels on all cores instead of one after another. Errors surface when
+    the kernels are used, as they would without the prefetch."""
+    if len(loaders) < 2 or compiler() is None:
+        return
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(max_workers=min(len(loaders), os.cpu_count() or 1)) as pool:
+        for future in [pool.submit(load) for load in loaders]:
+            future.exception()

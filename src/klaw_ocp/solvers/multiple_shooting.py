@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from .integrator import subphase_kernels
+from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
 from .newton import CondensedNewton
 from .problem import SubphaseProblem, SubphaseSolution, path_bounds
@@ -67,6 +67,10 @@ class MultipleShootingSolver:
         self.intervals, self.substeps = int(intervals), int(substeps)
         self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
         self._newton: dict = {}   # spec -> CondensedNewton (it keeps the last Jacobian for chord steps)
+
+    def prepare(self, specs) -> None:
+        """Compile or load the kernels of ``specs`` now, in parallel (the first run on a machine)."""
+        prepare_kernels(specs, self.substeps, self.intervals)
 
     # -- helpers -------------------------------------------------------------------------------
     def _kernels(self, pb: SubphaseProblem, call: _Call):

@@ -22,7 +22,7 @@ import numpy as np
 
 
 from .events import EventIntegrator
-from .integrator import subphase_kernels
+from .integrator import prepare_kernels, subphase_kernels
 from .problem import SubphaseProblem, SubphaseSolution, path_bounds
 
 
@@ -43,6 +43,10 @@ class PlainShootingSolver:
         self._fallbacks: list = []
         #: False while the event-free start solves the smooth problem (see :meth:`_solve_free`)
         self._events_armed = True
+
+    def prepare(self, specs) -> None:
+        """Compile or load the kernels of ``specs`` now, in parallel (the first run on a machine)."""
+        prepare_kernels(specs, self.substeps, self.intervals)
 
     # -- forward integration ----------------------------------------------------------------
     def simulate(self, pb: SubphaseProblem, u: np.ndarray):
