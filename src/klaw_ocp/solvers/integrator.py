@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from .kernels import KernelLibrary, prefetch, source_key
-from .problem import SubphaseSpec
+from .problem import SubphaseSpec, mapped
 
 
 class SubphaseKernels:
@@ -68,9 +68,9 @@ class SubphaseKernels:
             return [v.reshape(m, -1) for v in self.nodes(states, times, u, c)]
         spec, cols = self.spec, (states.T, times[None, :], np.tile(np.reshape(u, (-1, 1)), (1, m)),
                                  np.tile(np.reshape(c, (-1, 1)), (1, m)))
-        out = [np.asarray(spec.outputs.map(m)(*cols)).T]
-        out.append(np.asarray(spec.path.map(m)(*cols)).T if spec.path is not None else np.zeros((m, 0)))
-        out.append(np.asarray(spec.plausible.map(m)(cols[0], cols[3])).T if spec.plausible is not None
+        out = [np.asarray(mapped(spec.outputs, m)(*cols)).T]   # maps cached: built once per length
+        out.append(np.asarray(mapped(spec.path, m)(*cols)).T if spec.path is not None else np.zeros((m, 0)))
+        out.append(np.asarray(mapped(spec.plausible, m)(cols[0], cols[3])).T if spec.plausible is not None
                    else np.zeros((m, 0)))
         out.append(np.array([self.events(states[k], times[k], u, c)[0] for k in range(m)]).reshape(m, -1))
         return out
