@@ -1,7 +1,8 @@
-"""Kinematic "cosmetics" (section 4, principles 2 and 3): the virtual leg and its foot periods, the
-determinants of gait (pelvis), the upper body and the 37-joint skeleton.
+"""Kinematic "cosmetics" (section 4, principles 2 and 3): the 37-joint skeleton and its angles
+(:mod:`.skeleton`, :mod:`.pose`). The virtual leg with its foot periods and the determinants of
+gait (pelvis) join them here (issue #10, in progress).
 
-This is the one package that reaches back into the dynamics: the pelvis gives the swing model
-its hip (:mod:`.pelvis`), and the virtual leg gives swing1 its toe-off posture. The physics
+This is to be the one package that reaches back into the dynamics (the pelvis giving the swing
+model its hip, the virtual leg giving swing1 its toe-off posture). The physics
 (:mod:`klaw_ocp.dynamics`) and the solvers know nothing of it.
 """

@@ -14,8 +14,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..body import Body
-from .skeleton import (ANGLE_NAMES, JOINTS, LUMBAR, THORACIC, VERTEBRAE, Dimensions, zxy_angles,
-                       zxy_matrices)
+from .skeleton import (ANGLE_NAMES, JOINTS, LUMBAR, SIDES, VERTEBRAE, Dimensions, frames_array,
+                       zxy_angles, zxy_matrices)
 
 #: Hip points further than this (m) from the pelvis's own hips mean the caller's pelvis and legs
 #: disagree: the angles would silently describe another pose.
@@ -103,16 +103,6 @@ def _per_frame(value, name: str, n: int) -> np.ndarray:
     return np.broadcast_to(a, (n,)).copy()   # the caller may write into the angles
 
 
-def _points(value, name: str, n: int | None) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if a.ndim != 2 or a.shape[1] != 3 or (n is not None and a.shape[0] != n):
-        expected = f"({'n' if n is None else n}, 3)"
-        raise ValueError(f"{name}: expected shape {expected}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: contains NaN or infinite values")
-    return a
-
-
 def _unit(v: np.ndarray, name: str) -> np.ndarray:
     norm = np.linalg.norm(v, axis=-1, keepdims=True)
     if np.any(norm < 1e-12):
@@ -140,18 +130,18 @@ def _hinge_angle(parent: np.ndarray, child: np.ndarray) -> np.ndarray:
 
 def pelvis_rotations(pelvis_angles: np.ndarray) -> np.ndarray:
     """Pelvis tilt, list, rotation shape (n, 3) (rad) -> its world rotation shape (n, 3, 3)."""
-    a = _points(pelvis_angles, "pelvis_angles", None)
+    a = frames_array(pelvis_angles, "pelvis_angles", 3)
     pelvis = JOINTS[0]
     return zxy_matrices(*(sign * a[:, k] for k, sign in enumerate(pelvis.signs)))
 
 
 def hip_positions(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.ndarray) -> dict:
     """"right"/"left" -> the hip joint centres shape (n, 3) that the pelvis pose places (m)."""
-    centre = _points(pelvis_center, "pelvis_center", None)
+    centre = frames_array(pelvis_center, "pelvis_center", 3)
     rotation = pelvis_rotations(pelvis_angles)
     d = Dimensions.of(body)
     return {side: centre + rotation @ np.asarray(_JOINT[f"{s}_hip"].offset(d), dtype=float)
-            for s, side in (("r", "right"), ("l", "left"))}
+            for s, side in SIDES}
 
 
 def leg_segment_rotations(points: LegPoints) -> dict:
@@ -195,7 +185,7 @@ def upper_body_angles(upper_body: UpperBody, n: int) -> dict:
         per_side = getattr(upper_body, field_name)
         if not isinstance(per_side, dict) or set(per_side) != {"right", "left"}:
             raise ValueError(f"upper_body.{field_name}: expected a dict with keys 'right' and 'left'")
-        for s, side in (("r", "right"), ("l", "left")):
+        for s, side in SIDES:
             angles[f"{s}_{joint}_{angle}"] = _per_frame(per_side[side],
                                                         f"upper_body.{field_name}[{side!r}]", n)
     return angles
@@ -210,9 +200,9 @@ def skeleton_angles(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.nda
     whose hips must be where the pelvis puts them (to HIP_TOLERANCE_M); ``upper_body`` gives the
     totals spread by :func:`upper_body_angles`.
     """
-    centre = _points(pelvis_center, "pelvis_center", None)
+    centre = frames_array(pelvis_center, "pelvis_center", 3)
     n = centre.shape[0]
-    tilt_list_rotation = _points(pelvis_angles, "pelvis_angles", n)
+    tilt_list_rotation = frames_array(pelvis_angles, "pelvis_angles", 3, n)
     if not isinstance(legs, dict) or set(legs) != {"right", "left"}:
         raise ValueError("legs: expected a dict with keys 'right' and 'left'")
     pelvis = pelvis_rotations(tilt_list_rotation)
@@ -220,11 +210,11 @@ def skeleton_angles(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.nda
     out = np.empty((n, len(ANGLE_NAMES)))
     for k, name in enumerate(("pelvis_tilt", "pelvis_list", "pelvis_rotation")):
         out[:, _COLUMN[name]] = tilt_list_rotation[:, k]
-    for s, side in (("r", "right"), ("l", "left")):
+    for s, side in SIDES:
         points = legs[side]
         if not isinstance(points, LegPoints):
             raise ValueError(f"legs[{side!r}]: expected LegPoints, got {type(points).__name__}")
-        points = LegPoints(**{f.name: _points(getattr(points, f.name), f"legs[{side!r}].{f.name}", n)
+        points = LegPoints(**{f.name: frames_array(getattr(points, f.name), f"legs[{side!r}].{f.name}", 3, n)
                               for f in fields(LegPoints)})
         miss = np.linalg.norm(points.hip - hips[side], axis=1)
         if np.any(miss > HIP_TOLERANCE_M):

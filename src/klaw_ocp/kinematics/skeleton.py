@@ -50,7 +50,8 @@ CERVICAL = ("C7", "C6", "C5", "C4", "C3", "C2", "C1")
 #: segment below it (the vertebra's rotation relative to the one below, at the disc between them);
 #: C1 carries the head (nod at the atlanto-occipital joint, turn at the atlanto-axial joint).
 VERTEBRAE = LUMBAR + THORACIC + CERVICAL
-SIDES = {"r": "right", "l": "left"}
+#: The joint-name prefix of each side, and the side's name in dicts keyed by side.
+SIDES = (("r", "right"), ("l", "left"))
 
 
 @dataclass(frozen=True)
@@ -264,10 +265,12 @@ def zxy_angles(rotation: np.ndarray) -> tuple:
     return z, x, y
 
 
-def _frames_array(value, name: str, columns: int) -> np.ndarray:
+def frames_array(value, name: str, columns: int, frames: int | None = None) -> np.ndarray:
+    """``value`` as a finite float array of shape (frames, columns) (any number of frames when
+    ``frames`` is None); a ValueError naming ``name`` otherwise."""
     a = np.asarray(value, dtype=float)
-    if a.ndim != 2 or a.shape[1] != columns:
-        raise ValueError(f"{name}: expected shape (n, {columns}), got {a.shape}")
+    if a.ndim != 2 or a.shape[1] != columns or (frames is not None and a.shape[0] != frames):
+        raise ValueError(f"{name}: expected shape ({'n' if frames is None else frames}, {columns}), got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or infinite values")
     return a
@@ -275,7 +278,7 @@ def _frames_array(value, name: str, columns: int) -> np.ndarray:
 
 def local_rotations(angles: np.ndarray) -> np.ndarray:
     """Angles shape (n, 56) in ANGLE_NAMES order (rad) -> local rotations shape (n, 37, 3, 3)."""
-    a = _frames_array(angles, "angles", len(ANGLE_NAMES))
+    a = frames_array(angles, "angles", len(ANGLE_NAMES))
     signed = np.zeros((a.shape[0], len(JOINTS), 3))
     signed[:, _ANGLE_JOINT, _ANGLE_SLOT] = a * _ANGLE_SIGN
     return zxy_matrices(signed[..., 0], signed[..., 1], signed[..., 2])
@@ -306,7 +309,7 @@ class SkeletonFrames:
 def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray) -> SkeletonFrames:
     """World joint positions and rotations from the pelvis centre shape (n, 3) and the angles
     shape (n, 56) (rad)."""
-    root = _frames_array(root_position, "root_position", 3)
+    root = frames_array(root_position, "root_position", 3)
     local = local_rotations(angles)
     if local.shape[0] != root.shape[0]:
         raise ValueError(f"root_position: {root.shape[0]} frames but angles has {local.shape[0]}")
