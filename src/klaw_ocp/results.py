@@ -10,17 +10,26 @@ The table has one row per time sample, in walk time (s from the first heel strik
   swing3 the knee is locked (theta4 = theta4d = 0).
 
 hip_x/hip_y are world coordinates (m), x forward from the first stance ankle, y up from the ground.
+``hip_y_ref`` is the vertical sinusoid the stance is guided towards at that instant (§4.2, world y):
+lowest at the two heel strikes, a raised-cosine bump of the step's excursion in between.
+
+The summary gives each step its ``stance_leg`` (step 0's stance leg is the right leg; the legs
+alternate), its ``hip_reference`` (the sinusoid's heel-strike heights, excursion and the floor the
+hip must not drop below, world y, m) and each subphase the unit of every parameter.
 """
 from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 
+from .control.parameter_units import parameter_unit
+from .control.torques import hip_height_reference
 from .dynamics import stance_hips
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
-           "theta3d", "theta4d", "hip_x", "hip_y", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
+           "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 
 
 def _rows_for_step(step, body) -> list[dict]:
@@ -68,7 +77,25 @@ def _rows_for_step(step, body) -> list[dict]:
         rates = np.gradient([r["theta4"] for r in s1], [r["t"] for r in s1])
         for r, v in zip(s1, rates):
             r["theta4d"] = float(v)
+    for r, y in zip(rows, hip_reference_curve(step, body, np.array([r["t"] for r in rows]))):
+        r["hip_y_ref"] = y
     return rows
+
+
+def hip_reference_curve(step, body, t_world: np.ndarray) -> np.ndarray:
+    """The hip-height sinusoid of ``step`` (§4.2) at walk times ``t_world``, world y (m); NaN for a
+    step solved without one (a result from before it was recorded)."""
+    ref = step.hip_reference
+    if not ref:
+        return np.full(len(t_world), np.nan)
+    y, _ = hip_height_reference(ca.DM(np.asarray(t_world, float) - step.t_start), step.plan.timings.t_step,
+                                ref["y_start"], ref["y_end"], ref["excursion"])
+    return np.asarray(y, float).ravel() + body.l9
+
+
+def stance_leg(index: int) -> str:
+    """Which leg is the stance leg of step ``index``: step 0's is the right leg, then they alternate."""
+    return "right" if index % 2 == 0 else "left"
 
 
 def walk_table(walk) -> dict:
@@ -97,12 +124,19 @@ def walk_summary(walk, table: dict | None = None) -> dict:
     steps = []
     for step in walk.steps:
         entry = step.plan.as_dict()
-        entry.update(origin_x_m=step.origin_x, heel_clearance_min_m=step.heel_clearance_min,
+        entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
+                     hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                      hip_dip_m=hip_dip(walk.spec.body, step.subphase("stance")), notes=list(step.notes),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
+        if step.hip_reference:
+            l9, ref = walk.spec.body.l9, step.hip_reference
+            entry["hip_reference"] = {"y_start_m": ref["y_start"] + l9, "y_end_m": ref["y_end"] + l9,
+                                      "excursion_m": ref["excursion"],
+                                      "floor_m": min(ref["y_start"], ref["y_end"]) + l9}
         entry["subphases"] = [{
             "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
             "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
+            "units": {k: parameter_unit(k) for k in s.parameters},
             "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
             "path_min": _finite(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
             "build_s": float(s.build_s),
@@ -118,6 +152,7 @@ def walk_summary(walk, table: dict | None = None) -> dict:
         "wall_s": walk.wall_s, "simulated_s": walk.duration,
         "real_time_factor": walk.duration / walk.wall_s if walk.wall_s > 0 else None,
         "steps_planned": len(spec.plans), "steps_completed": len(walk.steps),
+        "start_from_rest": spec.start_from_rest, "end_at_rest": spec.end_at_rest,
         "mean_hip_speed_kmh": (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
                                if hip is not None and hip["t"][-1] > hip["t"][0] else None),
         "steps": steps,

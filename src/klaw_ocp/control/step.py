@@ -57,6 +57,9 @@ class StepResult:
     heel_clearance_min: float
     plan: object = None
     notes: list = field(default_factory=list)
+    #: the hip-height sinusoid the stance is guided towards (§4.2), in the stance ankle's frame:
+    #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m
+    hip_reference: dict = field(default_factory=dict)
 
     def subphase(self, name: str) -> SubphaseSolution:
         return next(s for s in self.subphases if s.name == name)
@@ -252,4 +255,5 @@ class StepController:
                                    "D": d_travel, "x0": x0, "coefficients": coeffs.tolist(),
                                    "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
                           final_stance_state=stance.final_state, heel_clearance_min=float(heel.min()) if heel.size else 0.0,
-                          plan=plan, notes=notes)
+                          plan=plan, notes=notes,
+                          hip_reference={"y_start": inp.y_start, "y_end": sctx["y_end"], "excursion": inp.excursion})

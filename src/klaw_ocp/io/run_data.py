@@ -1,0 +1,125 @@
+"""A finished run as plots, comparisons and writers read it: its summary and its sample table.
+
+:class:`RunData` is built either from a simulated :class:`~klaw_ocp.walk.Walk` in memory
+(:meth:`RunData.from_walk`) or from a results folder that ``klaw-ocp run`` wrote
+(:meth:`RunData.from_folder`: ``summary.json`` and ``dynamics.csv``). Both give the same object,
+so ``klaw-ocp plot DIR`` redraws a finished run and ``klaw-ocp compare`` reads old ones without
+solving anything. Nothing here imports a solver.
+
+``table`` maps every column of ``dynamics.csv`` (:data:`klaw_ocp.results.COLUMNS`) to an array
+(``subphase`` an array of str, ``step`` of int); ``summary`` is the dict of ``summary.json``
+(:func:`klaw_ocp.results.walk_summary`).
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+
+SUMMARY_FILE = "summary.json"
+DYNAMICS_FILE = "dynamics.csv"
+_TEXT_COLUMNS = ("subphase",)
+_INT_COLUMNS = ("step",)
+
+
+@dataclass
+class RunData:
+    """One run's results: ``name`` (a label), ``summary``, ``table`` and, when read from disk, ``folder``."""
+    name: str
+    summary: dict
+    table: dict
+    folder: Path | None = None
+    extra: dict = field(default_factory=dict)
+
+    # -- construction ----------------------------------------------------------------------------
+    @classmethod
+    def from_walk(cls, walk, table: dict | None = None, summary: dict | None = None) -> "RunData":
+        """The results of a walk in memory (``table``/``summary``: when the caller has them already)."""
+        from ..results import walk_summary, walk_table
+        if table is None:
+            table = walk_table(walk) if walk.steps else _empty_table()
+        if summary is None:
+            summary = walk_summary(walk, table)
+        return cls(name=walk.spec.name, summary=summary, table=table)
+
+    @classmethod
+    def from_folder(cls, folder, what: str = "results folder") -> "RunData":
+        """Read ``summary.json`` and ``dynamics.csv`` of a finished run; one-line ConfigError if
+        ``folder`` is not one (``what`` names the argument in that message)."""
+        folder = Path(folder)
+        summary_path, table_path = folder / SUMMARY_FILE, folder / DYNAMICS_FILE
+        if not folder.is_dir() or not summary_path.is_file() or not table_path.is_file():
+            raise ConfigError(f"{what}: got {str(folder)!r}, allowed a folder written by klaw-ocp run "
+                              f"(with {SUMMARY_FILE} and {DYNAMICS_FILE})")
+        try:
+            summary = json.loads(summary_path.read_text(encoding="utf-8"))
+            table = read_table(table_path)
+        except (OSError, UnicodeDecodeError, ValueError, KeyError) as exc:
+            raise ConfigError(f"{what}: got {str(folder)!r} whose result files cannot be read "
+                              f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]}), allowed files "
+                              f"written by klaw-ocp run") from None
+        if not isinstance(summary, dict) or "steps" not in summary or "body" not in summary:
+            raise ConfigError(f"{what}: got {str(summary_path)!r} without steps and body, allowed a "
+                              f"{SUMMARY_FILE} written by klaw-ocp run")
+        return cls(name=str(summary.get("name", folder.name)), summary=summary, table=table, folder=folder)
+
+    # -- views -----------------------------------------------------------------------------------
+    @property
+    def steps(self) -> list[dict]:
+        return self.summary["steps"]
+
+    @property
+    def body(self) -> dict:
+        return self.summary["body"]
+
+    @property
+    def method(self) -> str:
+        return str(self.summary.get("method", ""))
+
+    @property
+    def stance(self) -> str:
+        return str((self.summary.get("solver") or {}).get("stance", "monitored"))
+
+    @property
+    def label(self) -> str:
+        """``name (method, stance)``: how a legend or table names this run."""
+        return f"{self.name} ({self.method}, {self.stance} stance)"
+
+    @property
+    def duration(self) -> float:
+        steps = self.steps
+        return steps[-1]["t_start_s"] + steps[-1]["t_step_s"] - steps[0]["t_start_s"] if steps else 0.0
+
+    def column(self, name: str) -> np.ndarray:
+        return self.table[name]
+
+    def subphase_mask(self, name: str) -> np.ndarray:
+        return self.table["subphase"] == name
+
+
+def _empty_table() -> dict:
+    from ..results import COLUMNS
+    return {c: np.array([], dtype=str if c in _TEXT_COLUMNS else float) for c in COLUMNS}
+
+
+def read_table(path) -> dict:
+    """``dynamics.csv`` -> column name -> array (float; ``subphase`` str; ``step`` int)."""
+    with open(path, newline="", encoding="utf-8") as handle:
+        reader = csv.reader(handle)
+        header = next(reader)
+        rows = list(reader)
+    columns = list(zip(*rows)) if rows else [()] * len(header)
+    table = {}
+    for name, values in zip(header, columns):
+        if name in _TEXT_COLUMNS:
+            table[name] = np.array(values, dtype=str)
+        elif name in _INT_COLUMNS:
+            table[name] = np.array([int(v) for v in values], dtype=int)
+        else:
+            table[name] = np.array([float(v) for v in values], dtype=float)
+    return table
