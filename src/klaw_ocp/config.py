@@ -116,10 +116,12 @@ class SolverConfig(BaseModel):
 
 
 class OutputConfig(BaseModel):
-    """Where results go (default ``results/<name>``) and whether to render an animation."""
+    """Where results go (default ``results/<name>``), whether to draw the plots of the run
+    (``plots/``, docs/plots.md) and whether to render an animation."""
 
     model_config = _STRICT
     dir: Optional[str] = None
+    plots: bool = True
     animation: bool = False
 
 
@@ -170,6 +172,26 @@ class ExperimentConfig(BaseModel):
                           duration=self.walk.duration, attributes=self.attributes_model(),
                           start_from_rest=self.walk.start_from_rest)
 
+    def full_plan(self) -> list[StepPlan]:
+        """:meth:`plan` and, for a walk that ends at rest, its closing step (sl = 0)."""
+        plans = self.plan()
+        if self.walk.end_at_rest:
+            from .gait import closing_step
+            plans.append(closing_step(self.body_model(), self.attributes_model(), plans[-1]))
+        return plans
+
+    def resolved(self) -> dict:
+        """The whole experiment as a plain mapping with every default filled in, the attributes
+        included: loading it again gives the same walk (``config.resolved.yaml``)."""
+        data = self.model_dump(mode="json")
+        data["attributes"] = self.attributes_model().as_dict()
+        return data
+
+    def resolved_yaml(self, header: str = "") -> str:
+        """:meth:`resolved` as YAML (floats written exactly), after ``header`` as comment lines."""
+        comment = "".join(f"# {line}\n" for line in header.splitlines())
+        return comment + yaml.safe_dump(self.resolved(), sort_keys=False, allow_unicode=True)
+
     def output_dir(self) -> Path:
         """``output.dir`` if given, else ``results/<name>`` (relative to the working directory)."""
         return Path(self.output.dir) if self.output.dir else Path("results") / self.name
@@ -182,8 +204,10 @@ def check_stance_method(stance: str, method: str, prefix: str = "") -> None:
                           "(the tracking stance is an optimal control problem; use method multiple-shooting)")
 
 
-def load_config(path) -> ExperimentConfig:
-    """Read and validate an experiment YAML file; raise one-line ConfigError on any problem."""
+def load_config(path, sets=()) -> ExperimentConfig:
+    """Read and validate an experiment YAML file; raise one-line ConfigError on any problem.
+    ``sets``: ``--set PATH=VALUE`` overrides (:mod:`klaw_ocp.config_paths`), applied before the
+    validation, so an overridden value is checked like one in the file."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -201,6 +225,11 @@ def load_config(path) -> ExperimentConfig:
         raise ConfigError(f"{path}: invalid YAML{where}: {problem}") from None
     if data is None:
         raise ConfigError(out_of_range("config", f"{path} (empty)", "a mapping with name, body, walk"))
+    if sets:
+        if not isinstance(data, dict):
+            raise ConfigError(f"config: got {_short(data)}, allowed a mapping with name, body, walk")
+        from .config_paths import apply_sets
+        data = apply_sets(data, sets)
     return ExperimentConfig.from_mapping(data)
 
 

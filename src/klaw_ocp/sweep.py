@@ -16,7 +16,7 @@ names the failing step, subphase and residual; any other exception gives ``statu
 and its one-line message. :func:`write_sweep` writes ``sweep.csv`` (columns:
 :data:`RESULT_COLUMNS` after one column per varied path) and the map ``sweep.png``
 (:mod:`klaw_ocp.io.sweep_plot`). docs/sweep.md has the user's view.
-The `--vary` values are parsed by :mod:`klaw_ocp.sweep_values`.
+The `--vary` values are parsed by :mod:`klaw_ocp.config_paths` (the syntax `--set` shares).
 """
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, ConvergenceError, KlawError, out_of_range
-from .sweep_values import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
-                           combination_label, format_value, parse_values, parse_vary)
+from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
+                           combination_label, format_value, parse_values, parse_vary, set_path)
 
 METHODS = ("multiple-shooting", "plain-shooting")
 FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -45,21 +45,6 @@ RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residua
 STATUSES = ("ok", "failed", "error")
 
 # ---------------------------------------------------------------------------- grid, validation
-
-def set_path(mapping: dict, path: str, value) -> None:
-    """Set ``mapping[a][b][c] = value`` for ``path`` "a.b.c", creating missing mappings."""
-    keys = path.split(".")
-    node = mapping
-    for depth, key in enumerate(keys[:-1]):
-        if node.get(key) is None:
-            node[key] = {}
-        node = node[key]
-        if not isinstance(node, dict):
-            where = ".".join(keys[: depth + 1])
-            raise ConfigError(f"--vary {path}: got {where} = {node!r} in the config, allowed a path "
-                              f"through mappings only")
-    node[keys[-1]] = value
-
 
 def read_mapping(config) -> dict:
     """The experiment as a plain mapping: a dict (copied) or a YAML file (not validated here)."""

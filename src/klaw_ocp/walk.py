@@ -165,15 +165,10 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
 
 
 def closing_plan(spec: WalkSpec):
-    """The step that ends a walk at rest: the swing foot lands beside the stance foot (eq. 3 with
-    sl = 0, so theta1 = 0 and w = l1 at the end) at the last step's frequency, and the stance
-    ends with theta1d = 0 (a braking level of F_theta1 after 0.4 t_step)."""
-    from .gait import StepPlan, step_constraints
-    from .gait.parameters import LocomotionParameters
-    last = spec.plans[-1]
-    params = LocomotionParameters(0.0, 0.0, last.parameters.step_frequency_spm)
-    con = step_constraints(spec.body, 0.0, spec.attributes, ankle_x=last.constraints.next_ankle_x, closing=True)
-    return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step)
+    """The step that ends a walk at rest (:func:`klaw_ocp.gait.closing_step`); its stance ends
+    with theta1d = 0 (a braking level of F_theta1 after 0.4 t_step)."""
+    from .gait import closing_step
+    return closing_step(spec.body, spec.attributes, spec.plans[-1])
 
 
 def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInput | None:

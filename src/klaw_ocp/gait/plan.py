@@ -229,3 +229,12 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
                                        f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
     check_step_changes(body, [p.parameters for p in plans], attrs)
     return plans
+
+
+def closing_step(body: Body, attributes, last: StepPlan) -> StepPlan:
+    """The step that ends a walk at rest (section 5, fig. 8): the swing foot lands beside the
+    stance foot (eq. 3 with sl = 0, so theta1 = 0 and w = l1 at the end) at the last step's
+    frequency and timings; it starts where ``last`` ends."""
+    params = LocomotionParameters(0.0, 0.0, last.parameters.step_frequency_spm)
+    con = step_constraints(body, 0.0, attributes, ankle_x=last.constraints.next_ankle_x, closing=True)
+    return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step)

@@ -66,9 +66,18 @@ def render_walk(walk) -> dict:
     """Every result file of ``walk`` in memory: name -> (file name, bytes). Rendering is separate
     from writing so that the benchmark can time the two, and a failure to render writes nothing."""
     table = walk_table(walk) if walk.steps else {c: np.array([]) for c in COLUMNS}
-    summary = json.dumps(walk_summary(walk, table), indent=2, allow_nan=False) + "\n"
-    return {"dynamics": ("dynamics.csv", dynamics_csv(walk, table).encode("utf-8")),
-            "summary": ("summary.json", summary.encode("utf-8"))}
+    return _render(walk_summary(walk, table), dynamics_csv(walk, table))
+
+
+def render_run(run) -> dict:
+    """:func:`render_walk` of a :class:`~klaw_ocp.io.run_data.RunData` (its table and summary)."""
+    return _render(run.summary, dynamics_csv(None, run.table))
+
+
+def _render(summary: dict, table_csv: str) -> dict:
+    text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
+    return {"dynamics": ("dynamics.csv", table_csv.encode("utf-8")),
+            "summary": ("summary.json", text.encode("utf-8"))}
 
 
 def write_rendered(files: dict, out_dir) -> dict:

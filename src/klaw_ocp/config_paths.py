@@ -1,8 +1,11 @@
-"""``--vary PATH=VALUES`` of ``klaw-ocp sweep``: dotted config paths and their values (docs/sweep.md).
+"""Dotted config paths and their values: ``--set PATH=VALUE`` (``run``, ``validate``,
+``compare``) and ``--vary PATH=VALUES`` (``sweep``, docs/sweep.md) share one syntax.
 
-VALUES is a comma list of YAML scalars (``1,3,5``, ``true,false``) or ranges ``start:stop:step``
-that include their stop when it is on the grid. Every failure is one ConfigError line naming
-``--vary`` and what is allowed.
+PATH names a config field through its mappings (``walk.speed``, ``attributes.toe_clearance``,
+``body.height``, ``solver.intervals``). A VALUE is a YAML scalar (``4``, ``0.03``, ``true``,
+``null``, ``plain-shooting``); VALUES is a comma list of them or of ranges ``start:stop:step`` that
+include their stop when it is on the grid. The value is then validated like the file itself.
+Every failure is one ConfigError line naming the flag and what is allowed.
 """
 from __future__ import annotations
 
@@ -20,6 +23,8 @@ RANGE_REL_TOL = 1e-9
 #: Range values are rounded to this many significant digits (0.1:0.3:0.1 gives 0.3, not 0.30000000000000004).
 RANGE_DIGITS = 12
 _PATH = re.compile(r"^[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*$")
+_SET_ALLOWED = ("PATH=VALUE with PATH a dotted config path (walk.speed, attributes.toe_clearance, "
+                "body.height) and VALUE one YAML scalar (4, 0.03, true, plain-shooting)")
 _VARY_ALLOWED = ("PATH=VALUES with PATH a dotted config path (walk.speed) and VALUES a comma list of "
                  "YAML scalars (1,3,5 or true,false) or ranges start:stop:step with step > 0 (0.5:8:0.5)")
 
@@ -31,6 +36,39 @@ def parse_vary(text: str) -> tuple[str, list]:
     if not sep or not _PATH.match(path):
         raise ConfigError(out_of_range("--vary", text, _VARY_ALLOWED))
     return path, parse_values(values, path)
+
+
+def parse_set(text: str) -> tuple[str, object]:
+    """``"walk.speed=4"`` -> ``("walk.speed", 4)``: one YAML scalar, parsed as ``--vary`` parses
+    each of its values; one-line ConfigError otherwise."""
+    path, sep, value = str(text).partition("=")
+    path = path.strip()
+    if not sep or not _PATH.match(path) or not value.strip():
+        raise ConfigError(out_of_range("--set", text, _SET_ALLOWED))
+    return path, _parse_scalar(value.strip(), path, flag="--set", allowed=_SET_ALLOWED)
+
+
+def set_path(mapping: dict, path: str, value, flag: str = "--vary") -> None:
+    """Set ``mapping[a][b][c] = value`` for ``path`` "a.b.c", creating missing mappings."""
+    keys = path.split(".")
+    node = mapping
+    for depth, key in enumerate(keys[:-1]):
+        if node.get(key) is None:
+            node[key] = {}
+        node = node[key]
+        if not isinstance(node, dict):
+            where = ".".join(keys[: depth + 1])
+            raise ConfigError(f"{flag} {path}: got {where} = {node!r} in the config, allowed a path "
+                              f"through mappings only")
+    node[keys[-1]] = value
+
+
+def apply_sets(mapping: dict, sets) -> dict:
+    """``mapping`` with every ``--set PATH=VALUE`` of ``sets`` applied in order (a later one wins)."""
+    for text in sets or ():
+        path, value = parse_set(text)
+        set_path(mapping, path, value, flag="--set")
+    return mapping
 
 
 def parse_values(text: str, path: str = "PATH") -> list:
@@ -46,18 +84,18 @@ def parse_values(text: str, path: str = "PATH") -> list:
     return values
 
 
-def _parse_scalar(item: str, path: str):
+def _parse_scalar(item: str, path: str, flag: str = "--vary", allowed: str = _VARY_ALLOWED):
     try:
         value = yaml.safe_load(item)
     except yaml.YAMLError:
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}") from None
+        raise ConfigError(f"{flag} {path}: got {item!r}, allowed {allowed}") from None
     if isinstance(value, str):  # YAML 1.1 reads 1e-3 as a string; a number is meant
         try:
             return float(value)
         except ValueError:
             return value
     if isinstance(value, (list, dict)):
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed {_VARY_ALLOWED}")
+        raise ConfigError(f"{flag} {path}: got {item!r}, allowed {allowed}")
     return value
 
 

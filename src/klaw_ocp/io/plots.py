@@ -1,0 +1,225 @@
+"""The five plots of every run (``<results>/plots/``), drawn from a :class:`~klaw_ocp.io.run_data.RunData`.
+
+- ``hip_height.png`` (§4.2): the hip height over time against the vertical sinusoid the stance is
+  guided towards (one bump per step, lowest at the heel strikes) and the heel-strike floor the hip
+  should not drop below; a second axis shows the difference in mm.
+- ``gait_diagram.png`` (§3 state-phase timings, figure 3): :mod:`klaw_ocp.io.gait_diagram`.
+- ``torques.png`` (§4.2, §4.3): every applied force and torque, F_w, pa, F_θ1, F_θ2 of the
+  stance and F_θ3, F_θ4 of the swing, one axis each, coloured by subphase, with a swing2
+  recovery (§4.3 "recovery algorithm") shaded.
+- ``states.png`` (§4, figure 2): w, θ1, θ2 of the stance model and θ3, θ4 of the swing model.
+- ``legs.png`` (§5, figure 8): a strobe of the dynamic model, :mod:`klaw_ocp.io.strobe`.
+
+Every time plot follows bioptim: a solid thin vertical line at each step boundary (heel strike),
+dotted ones at the subphase boundaries (toe-off, end of swing1, end of swing2), and one colour per
+subphase (:data:`~klaw_ocp.io.plot_style.SUBPHASE_COLOURS`). A line is drawn per subphase with
+NaN breaks (one artist per subphase, not one per sample) and never joins two steps: at a heel
+strike the stance and swing coordinates change legs.
+
+The functions read results only: they never solve and never import a solver or pyplot.
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from ..errors import ConfigError, out_of_range
+from .gait_diagram import gait_diagram_figure, walk_end
+from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, new_figure, png_bytes,
+                         style_axes)
+from .strobe import legs_figure
+
+TABLE_SUBPHASES = ("double_support", "swing1", "swing2", "swing3")
+_RECOVERY_SHADE = {"facecolor": "#D55E00", "alpha": 0.12, "hatch": "///", "edgecolor": "#D55E00", "lw": 0}
+_ROLE = {"w": "stance leg", "theta1": "stance leg", "theta2": "upper body", "theta3": "swing hip",
+         "theta4": "swing knee", "F_w": "stance leg", "pa": "stance leg", "F_theta1": "stance hip",
+         "F_theta2": "stance hip", "F_theta3": "swing hip", "F_theta4": "swing knee"}
+
+
+# -- what the time plots share ---------------------------------------------------------------
+def boundaries(run) -> tuple[list[float], list[float]]:
+    """(step boundaries, subphase boundaries) in walk time (s): the heel strikes including the
+    last one, and every toe-off, end of swing1 and end of swing2."""
+    steps = [s["t_start_s"] for s in run.steps] + ([walk_end(run)] if run.steps else [])
+    subs = []
+    for s in run.steps:
+        toe_off = s["t_start_s"] + s["t_ds_s"]
+        subs += [toe_off, toe_off + s["t_swing1_end_s"], toe_off + s["t_swing2_end_s"]]
+    return steps, subs
+
+
+def swing2_recoveries(run) -> list[tuple[int, float, float, str]]:
+    """(step, t0, t1, note) of every swing2 that needed a recovery (§4.3): a nonzero
+    ``hip_actuator`` or a "recovery-loop" / "ipopt-repair" fallback."""
+    found = []
+    for s in run.steps:
+        for sub in s.get("subphases", []):
+            if sub.get("name") != "swing2":
+                continue
+            actuator = float(sub.get("parameters", {}).get("hip_actuator", 0.0) or 0.0)
+            how = [f for f in sub.get("fallbacks", []) if f in ("recovery-loop", "ipopt-repair")]
+            if actuator != 0.0 or how:
+                toe_off = s["t_start_s"] + s["t_ds_s"]
+                note = ", ".join(how + ([f"hip_actuator {actuator:+.3f} rad"] if actuator else []))
+                found.append((s["index"], toe_off + s["t_swing1_end_s"], toe_off + s["t_swing2_end_s"], note))
+    return found
+
+
+def subphase_lines(table: dict, column: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """subphase -> (t, y) with NaN breaks: the samples of that subphase, each run of them joined
+    to the previous sample of the same step (the table drops a subphase's first node, which is
+    the previous one's last), never across a step boundary."""
+    t, y = np.asarray(table["t"], float), np.asarray(table[column], float)
+    sub, step = table["subphase"], np.asarray(table["step"])
+    out = {}
+    if len(t) < 2:
+        return out
+    same_step = step[1:] == step[:-1]
+    for name in TABLE_SUBPHASES:
+        seg = np.flatnonzero(same_step & (sub[1:] == name))      # segment j joins rows j and j + 1
+        if seg.size == 0:
+            continue
+        groups = np.split(seg, np.flatnonzero(np.diff(seg) != 1) + 1)
+        rows = np.concatenate([np.r_[g, g[-1] + 1, -1] for g in groups])
+        nan = rows < 0
+        tt, yy = t[rows], y[rows]
+        tt[nan], yy[nan] = np.nan, np.nan
+        out[name] = (tt, yy)
+    return out
+
+
+def draw_boundaries(ax, run, subphases: bool = True) -> None:
+    """Thin vertical lines at the step boundaries (solid) and subphase boundaries (dotted)."""
+    steps, subs = boundaries(run)
+    trans = ax.get_xaxis_transform()
+    if subphases and subs:
+        ax.vlines(subs, 0, 1, transform=trans, colors="#9a9a9a", lw=0.45, linestyles=":", zorder=1)
+    if steps:
+        ax.vlines(steps, 0, 1, transform=trans, colors="#444444", lw=0.6, zorder=1)
+
+
+def draw_recoveries(ax, recoveries) -> None:
+    """A hatched span over every swing2 that needed a recovery (:func:`swing2_recoveries`)."""
+    for _, t0, t1, _ in recoveries:
+        ax.axvspan(t0, t1, zorder=0, **_RECOVERY_SHADE)
+
+
+def _subphase_handles(recoveries) -> list:
+    handles = [Line2D([], [], color=SUBPHASE_COLOURS[s], lw=2, label=SUBPHASE_LABELS[s]) for s in TABLE_SUBPHASES]
+    handles += [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)"),
+                Line2D([], [], color="#9a9a9a", lw=0.8, ls=":", label="subphase boundary")]
+    if recoveries:
+        what = "; ".join(f"step {k}: {note}" for k, _, _, note in recoveries[:3])
+        more = f"; +{len(recoveries) - 3} more" if len(recoveries) > 3 else ""
+        handles.append(Patch(label=f"swing2 recovery ({what}{more})", **_RECOVERY_SHADE))
+    return handles
+
+
+def _empty(fig, run, what: str):
+    ax = fig.add_subplot()
+    ax.text(0.5, 0.5, f"{run.name}: no completed step, no {what}", ha="center", va="center", fontsize=FONT_PT + 2)
+    ax.set_axis_off()
+    return fig
+
+
+def _series_figure(run, columns, title: str, height_per_axis: float):
+    """One axis per column over time, shared x, each line coloured by subphase."""
+    fig = new_figure(11.0, 1.0 + height_per_axis * len(columns))
+    if not run.steps or len(run.table["t"]) == 0:
+        return _empty(fig, run, title.lower())
+    axes = fig.subplots(len(columns), 1, sharex=True)
+    recoveries = swing2_recoveries(run)
+    for ax, column in zip(axes, columns):
+        style_axes(ax)
+        draw_boundaries(ax, run)
+        draw_recoveries(ax, recoveries)
+        for name, (t, y) in subphase_lines(run.table, column).items():
+            ax.plot(t, y, color=SUBPHASE_COLOURS[name], lw=1.2, zorder=3)
+        ax.set_ylabel(f"{SYMBOLS[column]}\n{_ROLE[column]}")
+        ax.margins(x=0.0, y=0.08)
+    axes[-1].set_xlabel("t (s), walk time from the first heel strike")
+    axes[-1].set_xlim(0, walk_end(run))
+    fig.suptitle(f"{title}: {run.label}", fontsize=FONT_PT + 2)
+    handles = _subphase_handles(recoveries)
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 7 if not recoveries else 4),
+               fontsize=FONT_PT, frameon=False)
+    return fig
+
+
+# -- the plots -------------------------------------------------------------------------------
+def torques_figure(run):
+    """``torques.png``: F_w, pa, F_θ1, F_θ2 (stance) and F_θ3, F_θ4 (swing; none in double
+    support, where the hind leg is kinematic) over time, coloured by subphase."""
+    return _series_figure(run, ("F_w", "pa", "F_theta1", "F_theta2", "F_theta3", "F_theta4"),
+                          "Applied forces and torques", 1.45)
+
+
+def states_figure(run):
+    """``states.png``: w, θ1, θ2 of the stance model and θ3, θ4 of the swing (hind) leg over
+    time, coloured by subphase (in double support θ3, θ4 are the hind leg's kinematic angles)."""
+    return _series_figure(run, ("w", "theta1", "theta2", "theta3", "theta4"), "States", 1.5)
+
+
+def hip_height_figure(run):
+    """``hip_height.png``: hip height, the §4.2 reference sinusoid (dashed), the heel-strike floor
+    per step and the step boundaries; below, hip height minus reference in mm."""
+    fig = new_figure(11.0, 5.6)
+    if not run.steps or len(run.table["t"]) == 0:
+        return _empty(fig, run, "hip height")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2.3, 1.0))
+    t, y, ref = run.table["t"], run.table["hip_y"], run.table["hip_y_ref"]
+    for ax in (top, bottom):
+        style_axes(ax)
+        draw_boundaries(ax, run, subphases=False)
+    # the floor: a step function over each step (a gap where a step recorded no reference)
+    ft, fy = [], []
+    for s in run.steps:
+        floor = (s.get("hip_reference") or {}).get("floor_m")
+        if floor is not None:
+            ft += [s["t_start_s"], s["t_start_s"] + s["t_step_s"], np.nan]
+            fy += [floor, floor, np.nan]
+    handles = [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)")]
+    if ft:
+        handles += top.plot(ft, fy, color="#777777", lw=1.2, ls="-", zorder=2,
+                            label="heel-strike floor (lower of the step's two heel-strike heights)")
+    if np.isfinite(ref).any():
+        handles += top.plot(t, ref, color="#D55E00", lw=1.3, ls=(0, (4, 2.5)), zorder=3,
+                            label="reference sinusoid y_ref (§4.2)")
+    handles += top.plot(t, y, color=ACCENT, lw=1.1, zorder=4, label="hip height y_hip")
+    top.set_ylabel(SYMBOLS["hip_y"])
+    lo, hi = np.nanmin(np.r_[y, fy if fy else y]), np.nanmax(np.r_[y, ref[np.isfinite(ref)] if np.isfinite(ref).any() else y])
+    top.set_ylim(lo - 0.08 * (hi - lo), hi + 0.55 * (hi - lo))      # headroom for the legend
+    top.legend(handles=handles, loc="upper center", ncols=2, fontsize=FONT_PT, frameon=True, framealpha=0.9)
+    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps "
+                  "(the hip should rise and fall once per step)", loc="left")
+    bottom.axhline(0.0, color="#777777", lw=0.8)
+    if np.isfinite(ref).any():
+        bottom.plot(t, 1000.0 * (y - ref), color=ACCENT, lw=1.0)
+    bottom.set_ylabel("y_hip − y_ref (mm)")
+    bottom.set_xlabel("t (s), walk time from the first heel strike")
+    bottom.set_xlim(0, walk_end(run))
+    return fig
+
+
+#: name -> (file name, figure function of a RunData)
+PLOTS = {
+    "hip_height": ("hip_height.png", hip_height_figure),
+    "gait_diagram": ("gait_diagram.png", gait_diagram_figure),
+    "torques": ("torques.png", torques_figure),
+    "states": ("states.png", states_figure),
+    "legs": ("legs.png", legs_figure),
+}
+
+
+def render_plots(run, names=None) -> dict[str, tuple[str, bytes]]:
+    """Every plot of ``run`` (or those in ``names``) as name -> (file name, PNG bytes), ready for
+    :func:`klaw_ocp.io.writers.write_rendered` into ``<results>/plots/``."""
+    unknown = sorted(set(names or ()) - set(PLOTS))
+    if unknown:
+        raise ConfigError(out_of_range("plot names", unknown, f"any of {sorted(PLOTS)}"))
+    rendered = {}
+    for name in (names or PLOTS):
+        filename, figure = PLOTS[name]
+        rendered[name] = (filename, png_bytes(figure(run)))
+    return rendered
