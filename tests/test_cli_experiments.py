@@ -168,3 +168,80 @@ def test_no_plots_skips_them_and_removes_stale_ones(two_steps, tmp_path):
 def test_plot_refuses_a_folder_that_is_not_a_run(tmp_path, capsys):
     assert main(["plot", str(tmp_path)]) == 2
     assert "DIR" in _one_error_line(capsys)
+
+
+# -------------------------------------------------------------------------------------- compare
+
+def _csv_rows(path):
+    with open(path, newline="", encoding="utf-8") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_compare_one_config_runs_both_modes_and_matches_two_separate_runs(two_steps, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", str(two_steps), "--out", str(out), "--quiet"]) == 0
+    rows = _csv_rows(out / "comparison.csv")
+    assert len(rows) == 2 * 4 * 2                                   # steps x subphases x modes
+    assert {r["run"] for r in rows} == {"two (multiple-shooting, monitored stance)",
+                                        "two (plain-shooting, monitored stance)"}
+    assert (out / "comparison.png").read_bytes()[:4] == b"\x89PNG"
+    table = capsys.readouterr().out
+    assert "hip height" in table and "iterations" in table
+    # the same two walks run separately
+    for method in ("multiple-shooting", "plain-shooting"):
+        assert main(["run", str(two_steps), "--out", str(tmp_path / method), "--quiet", "--no-plots",
+                     "--method", method]) == 0
+    ms, ps = (json.loads((tmp_path / m / "summary.json").read_text()) for m in ("multiple-shooting", "plain-shooting"))
+    for row in (r for r in rows if r["run"].startswith("two (plain")):
+        k, name = int(row["step"]), row["subphase"]
+        a = next(s for s in ms["steps"][k]["subphases"] if s["name"] == name)["parameters"]
+        b = next(s for s in ps["steps"][k]["subphases"] if s["name"] == name)["parameters"]
+        for param in a:
+            column = next(c for c in row if c.startswith(f"d_{param} ["))
+            assert float(row[column]) == pytest.approx(b[param] - a[param], rel=1e-9, abs=1e-12)
+    # and the hip-height difference of the two separate runs
+    from klaw_ocp.compare import comparison_stats
+    from klaw_ocp.io import RunData
+    separate = comparison_stats([RunData.from_folder(tmp_path / m) for m in ("multiple-shooting", "plain-shooting")])
+    inside = comparison_stats([RunData.from_folder(p) for p in sorted((out / "runs").iterdir())])
+    assert inside["runs"][1]["hip_y"]["value"] == pytest.approx(separate["runs"][1]["hip_y"]["value"], rel=1e-9, abs=1e-15)
+    direct = np.max(np.abs(np.array([float(r["hip_y"]) for r in _csv_rows(tmp_path / "multiple-shooting" / "dynamics.csv")])
+                           - np.array([float(r["hip_y"]) for r in _csv_rows(tmp_path / "plain-shooting" / "dynamics.csv")])))
+    assert separate["runs"][1]["hip_y"]["value"] == pytest.approx(direct, rel=1e-9, abs=1e-15)
+
+
+def test_compare_of_results_folders_solves_nothing(two_steps, tmp_path, monkeypatch, capsys):
+    for method in ("multiple-shooting", "plain-shooting"):
+        assert main(["run", str(two_steps), "--out", str(tmp_path / method), "--quiet", "--no-plots",
+                     "--method", method]) == 0
+    import klaw_ocp.walk
+    monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", lambda *a, **k: pytest.fail("solved a walk"))
+    out = tmp_path / "cmp"
+    assert main(["compare", str(tmp_path / "multiple-shooting"), str(tmp_path / "plain-shooting"),
+                 "--out", str(out)]) == 0
+    assert len(_csv_rows(out / "comparison.csv")) == 16
+    assert not (out / "runs").exists()
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--method", "fast"], "--method"),
+    (["--stance", "monitored,monitored"], "--stance"),
+    (["--method", "plain-shooting", "--stance", "tracking"], "solver.stance"),
+    (["--method", "plain-shooting"], "compare"),                     # one run is nothing to compare
+    (["--set", "walk.speed=-2"], "walk.speed"),
+])
+def test_compare_refuses_bad_input_before_solving(args, field, two_steps, tmp_path, capsys, no_solving):
+    out = tmp_path / "cmp"
+    assert main(["compare", str(two_steps), "--out", str(out), *args]) == 2
+    assert field in _one_error_line(capsys)
+    assert not out.exists()
+
+
+def test_compare_refuses_solver_flags_with_only_folders_and_a_missing_input(tmp_path, capsys, no_solving):
+    (tmp_path / "a").mkdir()
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "a"), "--method", "plain-shooting"]) == 2
+    assert "--method" in _one_error_line(capsys)
+    assert main(["compare", str(tmp_path / "nope.yaml"), str(tmp_path / "a")]) == 2
+    assert "INPUT" in _one_error_line(capsys)
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "a")]) == 2        # not a results folder
+    assert "INPUT" in _one_error_line(capsys)

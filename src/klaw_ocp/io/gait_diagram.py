@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .plot_style import (FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, new_figure, style_axes)
+from .plot_style import FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, axes_column, new_figure, style_axes
 
 LEGS = ("right", "left")
 SWING_KINDS = ("swing1", "swing2", "swing3")
@@ -118,8 +118,10 @@ def draw_gait_bars(ax, run, bars: list[GaitBar] | None = None, markers: bool = T
     row centre, default 1 right, 0 left); one ``broken_barh`` per leg and kind."""
     bars = gait_bars(run) if bars is None else bars
     rows = _ROW_Y if rows is None else rows
-    for t0, t1 in double_supports(run):
-        ax.axvspan(t0, t1, **_DS_SHADE, zorder=0)
+    spans = [(t0, t1 - t0) for t0, t1 in double_supports(run)]
+    if spans:   # one collection over the axis' full height (not one patch per double support)
+        ax.broken_barh(spans, (0, 1), transform=ax.get_xaxis_transform(), facecolors=_DS_SHADE["color"],
+                       alpha=_DS_SHADE["alpha"], lw=0, zorder=0)
     for leg in LEGS:
         for kind in ("stance",) + SWING_KINDS:
             spans = [(b.t0, b.t1 - b.t0) for b in bars if b.leg == leg and b.kind == kind]
@@ -196,15 +198,15 @@ def _rest_notes(ax, run) -> None:
 
 def gait_diagram_figure(run):
     """The gait diagram of ``run`` (figure 3 of the paper) as a :class:`matplotlib.figure.Figure`."""
-    fig = new_figure(11.0, 5.8)
     if not run.steps:
+        fig = new_figure(8.0, 3.0)
         ax = fig.add_subplot()
         ax.text(0.5, 0.5, f"{run.name}: no completed step", ha="center", va="center", fontsize=FONT_PT + 2)
         ax.set_axis_off()
         return fig
-    grid = fig.add_gridspec(2, 2, width_ratios=(5.0, 1.0), height_ratios=(1.0, 1.45))
-    whole, zoom = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[1, 0])
-    side_top, side_bottom = fig.add_subplot(grid[0, 1]), fig.add_subplot(grid[1, 1])
+    # fixed layout, inches: rows of labels on the left, the legend and the value box on the right
+    fig = new_figure(10.5, 5.5, layout=None)
+    whole, zoom = axes_column(fig, [1.6, 2.1], left=0.85, right=2.3, top=0.58, gaps=0.78, sharex=False)
     bars, end = gait_bars(run), walk_end(run)
     for ax, rows in ((whole, _ROW_Y), (zoom, _ZOOM_ROW_Y)):
         style_axes(ax)
@@ -214,7 +216,7 @@ def gait_diagram_figure(run):
     whole.vlines([s["t_start_s"] for s in run.steps] + [end], 0, 1, transform=whole.get_xaxis_transform(),
                  colors="#555555", lw=0.5, zorder=1)
     _rest_notes(whole, run)
-    whole.set_title(f"Gait diagram: {run.label}, {len(run.steps)} steps, {end:.2f} s", loc="left", pad=14)
+    whole.set_title(f"Gait diagram: {run.label}, {len(run.steps)} steps, {end:.2f} s", loc="left", pad=15)
     k = representative_step(run)
     step = run.steps[k]
     t0 = step["t_start_s"]
@@ -225,11 +227,9 @@ def gait_diagram_figure(run):
     zoom.set_title(f"Step {k} as in the paper's figure 3 (eq. 2: t_step = t_stance − t_ds = t_swing + t_ds)",
                    loc="left")
     lines = _annotate_step(zoom, run, k)
-    for ax in (side_top, side_bottom):
-        ax.set_axis_off()
-    side_top.legend(handles=_legend_handles(), loc="center left", fontsize=FONT_PT, frameon=False,
-                    borderaxespad=0.0)
-    side_bottom.text(0.0, 0.5, "\n".join(lines), transform=side_bottom.transAxes, ha="left", va="center",
-                     family="monospace", fontsize=FONT_PT,
-                     bbox={"boxstyle": "round,pad=0.4", "fc": "#f7f7f7", "ec": "#999999"})
+    whole.legend(handles=_legend_handles(), loc="upper left", bbox_to_anchor=(1.03, 1.0), fontsize=FONT_PT,
+                 frameon=False, borderaxespad=0.0)
+    zoom.text(1.03, 0.5, "\n".join(lines), transform=zoom.transAxes, ha="left", va="center",
+              family="monospace", fontsize=FONT_PT,
+              bbox={"boxstyle": "round,pad=0.4", "fc": "#f7f7f7", "ec": "#999999"})
     return fig

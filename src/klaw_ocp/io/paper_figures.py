@@ -65,12 +65,12 @@ def fig10_figure(runs, paper: dict):
     for ax, run, key in zip(np.atleast_1d(axes), runs, keys):
         k, t = _heel_strike_time(run)
         step = run.steps[k]
-        draw_posture(ax, run, t, centre=True)
+        draw_posture(ax, run, t - 1e-9, origin_at=0.0)   # the landing leg still swinging, knee straight
         ours = f"sl = {step['step_length_m']:.3f} m, sf = {step['step_frequency_spm']:.1f} steps/min"
         ref = paper.get(key, {})
         theirs = f"paper: sl = {ref.get('sl_m', float('nan')):.2f} m, sf = {ref.get('sf_spm', float('nan')):.1f}"
         ax.set_title(f"{titles[key]}\n{ours}\n{theirs}", fontsize=FONT_PT + 1)
-        ax.set_xlabel("x from the hip (m)")
+        ax.set_xlabel("x from the stance ankle (m)")
         style_axes(ax)
     np.atleast_1d(axes)[0].set_ylabel("height (m)")
     fig.suptitle("Figure 10: heel strike of three walks at v = 5 km/h (the landing leg in front)",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 
+import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -39,13 +40,42 @@ SYMBOLS = {
     "F_theta3": "F_θ3 (N·m)", "F_theta4": "F_θ4 (N·m)",
 }
 FORCE_COLUMNS = ("F_w", "pa", "F_theta1", "F_theta2", "F_theta3", "F_theta4")
+#: zlib level of the PNGs: 3 is about as small as the default 6 and much faster to write
+PNG_COMPRESS_LEVEL = 3
 
 
-def new_figure(width_in: float, height_in: float) -> Figure:
-    """An Agg figure with the shared font size and a constrained layout (nothing clipped)."""
-    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+def new_figure(width_in: float, height_in: float, layout: str | None = "constrained") -> Figure:
+    """An Agg figure with the shared font size and a constrained layout (nothing clipped);
+    ``layout=None`` for a figure whose axes are placed in inches (:func:`add_axes_in`)."""
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout=layout)
     FigureCanvasAgg(fig)
     return fig
+
+
+def add_axes_in(fig: Figure, left: float, bottom: float, width: float, height: float, **kwargs):
+    """An axes placed in inches from the figure's lower-left corner. The run plots place their
+    axes so (margins sized for their labels at :data:`FONT_PT`): a constrained layout costs about
+    as much as drawing the figure again."""
+    w, h = fig.get_size_inches()
+    return fig.add_axes((left / w, bottom / h, width / w, height / h), **kwargs)
+
+
+def axes_column(fig: Figure, heights: list, left: float, right: float, top: float, gaps, sharex: bool = True) -> list:
+    """Axes stacked from ``top`` inches below the figure's top edge downwards, ``heights`` and
+    ``gaps`` (one number, or one per gap) in inches, ``left``/``right`` margins in inches."""
+    w, h = fig.get_size_inches()
+    gaps = [gaps] * (len(heights) - 1) if isinstance(gaps, (int, float)) else list(gaps)
+    axes, y = [], h - top
+    for i, height in enumerate(heights):
+        y -= height
+        share = axes[0] if sharex and axes else None
+        axes.append(add_axes_in(fig, left, y, w - left - right, height, sharex=share))
+        if i < len(gaps):
+            y -= gaps[i]
+    if sharex:
+        for ax in axes[:-1]:
+            ax.tick_params(labelbottom=False)
+    return axes
 
 
 def style_axes(ax) -> None:
@@ -56,8 +86,28 @@ def style_axes(ax) -> None:
     ax.grid(True, lw=0.4, alpha=0.4)
 
 
-def png_bytes(fig: Figure) -> bytes:
-    """The figure as a PNG at :data:`DPI`."""
+def figure_pixels(fig: Figure) -> np.ndarray:
+    """The figure drawn once on its Agg canvas at :data:`DPI` (the layout engine, if any, runs
+    inside that draw), as an (h, w, 3) uint8 array."""
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    dpi = fig.dpi
+    try:
+        fig.dpi = DPI
+        canvas.draw()
+        return np.array(np.asarray(canvas.buffer_rgba())[..., :3])
+    finally:
+        fig.dpi = dpi
+
+
+def encode_png(pixels: np.ndarray) -> bytes:
+    """An (h, w, 3) uint8 array as PNG bytes (Pillow; it releases the GIL while compressing)."""
+    from PIL import Image
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=DPI)
+    Image.fromarray(pixels, "RGB").save(buffer, format="png", dpi=(DPI, DPI), compress_level=PNG_COMPRESS_LEVEL)
     return buffer.getvalue()
+
+
+def png_bytes(fig: Figure) -> bytes:
+    """The figure as a PNG at :data:`DPI`: :func:`figure_pixels` then :func:`encode_png`.
+    (``savefig`` would draw the figure twice, a layout pass and the image.)"""
+    return encode_png(figure_pixels(fig))

@@ -23,11 +23,12 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
 
 from ..errors import ConfigError, out_of_range
 from .gait_diagram import gait_diagram_figure, walk_end
-from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, new_figure, png_bytes,
-                         style_axes)
+from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, axes_column, encode_png,
+                         figure_pixels, new_figure, style_axes)
 from .strobe import legs_figure
 
 TABLE_SUBPHASES = ("double_support", "swing1", "swing2", "swing3")
@@ -94,7 +95,7 @@ def draw_boundaries(ax, run, subphases: bool = True) -> None:
     steps, subs = boundaries(run)
     trans = ax.get_xaxis_transform()
     if subphases and subs:
-        ax.vlines(subs, 0, 1, transform=trans, colors="#9a9a9a", lw=0.45, linestyles=":", zorder=1)
+        ax.vlines(subs, 0, 1, transform=trans, colors="#c8c8c8", lw=0.5, zorder=1)
     if steps:
         ax.vlines(steps, 0, 1, transform=trans, colors="#444444", lw=0.6, zorder=1)
 
@@ -108,7 +109,7 @@ def draw_recoveries(ax, recoveries) -> None:
 def _subphase_handles(recoveries) -> list:
     handles = [Line2D([], [], color=SUBPHASE_COLOURS[s], lw=2, label=SUBPHASE_LABELS[s]) for s in TABLE_SUBPHASES]
     handles += [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)"),
-                Line2D([], [], color="#9a9a9a", lw=0.8, ls=":", label="subphase boundary")]
+                Line2D([], [], color="#c8c8c8", lw=1.0, label="subphase boundary")]
     if recoveries:
         what = "; ".join(f"step {k}: {note}" for k, _, _, note in recoveries[:3])
         more = f"; +{len(recoveries) - 3} more" if len(recoveries) > 3 else ""
@@ -116,20 +117,34 @@ def _subphase_handles(recoveries) -> list:
     return handles
 
 
-def _empty(fig, run, what: str):
+def _empty(run, what: str):
+    fig = new_figure(8.0, 3.0)
     ax = fig.add_subplot()
     ax.text(0.5, 0.5, f"{run.name}: no completed step, no {what}", ha="center", va="center", fontsize=FONT_PT + 2)
     ax.set_axis_off()
     return fig
 
 
-def _series_figure(run, columns, title: str, height_per_axis: float):
+def _has_samples(run) -> bool:
+    return bool(run.steps) and len(run.table["t"]) > 0
+
+
+# fixed layout of the time plots, inches (see plot_style.add_axes_in)
+_WIDTH, _LEFT, _RIGHT, _TOP, _GAP, _XLABEL, _LEGEND_ROW = 10.5, 1.15, 0.25, 0.42, 0.1, 0.5, 0.24
+
+
+def _series_figure(run, columns, title: str, axis_height: float):
     """One axis per column over time, shared x, each line coloured by subphase."""
-    fig = new_figure(11.0, 1.0 + height_per_axis * len(columns))
-    if not run.steps or len(run.table["t"]) == 0:
-        return _empty(fig, run, title.lower())
-    axes = fig.subplots(len(columns), 1, sharex=True)
+    if not _has_samples(run):
+        return _empty(run, title.lower())
     recoveries = swing2_recoveries(run)
+    handles = _subphase_handles(recoveries)
+    ncols = 7 if not recoveries else 4
+    legend_rows = -(-len(handles) // ncols)
+    bottom = _XLABEL + legend_rows * _LEGEND_ROW + 0.12
+    height = _TOP + len(columns) * axis_height + (len(columns) - 1) * _GAP + bottom
+    fig = new_figure(_WIDTH, height, layout=None)
+    axes = axes_column(fig, [axis_height] * len(columns), _LEFT, _RIGHT, _TOP, _GAP)
     for ax, column in zip(axes, columns):
         style_axes(ax)
         draw_boundaries(ax, run)
@@ -137,13 +152,13 @@ def _series_figure(run, columns, title: str, height_per_axis: float):
         for name, (t, y) in subphase_lines(run.table, column).items():
             ax.plot(t, y, color=SUBPHASE_COLOURS[name], lw=1.2, zorder=3)
         ax.set_ylabel(f"{SYMBOLS[column]}\n{_ROLE[column]}")
+        ax.yaxis.set_major_locator(MaxNLocator(nbins=4))     # few ticks: each costs a few artists
         ax.margins(x=0.0, y=0.08)
     axes[-1].set_xlabel("t (s), walk time from the first heel strike")
     axes[-1].set_xlim(0, walk_end(run))
-    fig.suptitle(f"{title}: {run.label}", fontsize=FONT_PT + 2)
-    handles = _subphase_handles(recoveries)
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 7 if not recoveries else 4),
-               fontsize=FONT_PT, frameon=False)
+    fig.suptitle(f"{title}: {run.label}", fontsize=FONT_PT + 2, y=1 - 0.1 / height, va="top")
+    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=ncols,
+               fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig
 
 
@@ -152,23 +167,25 @@ def torques_figure(run):
     """``torques.png``: F_w, pa, F_θ1, F_θ2 (stance) and F_θ3, F_θ4 (swing; none in double
     support, where the hind leg is kinematic) over time, coloured by subphase."""
     return _series_figure(run, ("F_w", "pa", "F_theta1", "F_theta2", "F_theta3", "F_theta4"),
-                          "Applied forces and torques", 1.45)
+                          "Applied forces and torques", 1.05)
 
 
 def states_figure(run):
     """``states.png``: w, θ1, θ2 of the stance model and θ3, θ4 of the swing (hind) leg over
     time, coloured by subphase (in double support θ3, θ4 are the hind leg's kinematic angles)."""
-    return _series_figure(run, ("w", "theta1", "theta2", "theta3", "theta4"), "States", 1.5)
+    return _series_figure(run, ("w", "theta1", "theta2", "theta3", "theta4"), "States", 1.15)
 
 
 def hip_height_figure(run):
     """``hip_height.png``: hip height, the §4.2 reference sinusoid (dashed), the heel-strike floor
     per step and the step boundaries; below, hip height minus reference in mm."""
-    fig = new_figure(11.0, 5.6)
-    if not run.steps or len(run.table["t"]) == 0:
-        return _empty(fig, run, "hip height")
-    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2.3, 1.0))
+    if not _has_samples(run):
+        return _empty(run, "hip height")
+    height = 5.0
+    fig = new_figure(_WIDTH, height, layout=None)
+    top, bottom = axes_column(fig, [2.75, 1.15], 1.0, _RIGHT, 0.35, 0.12)
     t, y, ref = run.table["t"], run.table["hip_y"], run.table["hip_y_ref"]
+    has_ref = bool(np.isfinite(ref).any())
     for ax in (top, bottom):
         style_axes(ax)
         draw_boundaries(ax, run, subphases=False)
@@ -181,22 +198,24 @@ def hip_height_figure(run):
             fy += [floor, floor, np.nan]
     handles = [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)")]
     if ft:
-        handles += top.plot(ft, fy, color="#777777", lw=1.2, ls="-", zorder=2,
+        handles += top.plot(ft, fy, color="#0072B2", lw=1.1, ls="-.", zorder=2,
                             label="heel-strike floor (lower of the step's two heel-strike heights)")
-    if np.isfinite(ref).any():
+    if has_ref:
         handles += top.plot(t, ref, color="#D55E00", lw=1.3, ls=(0, (4, 2.5)), zorder=3,
                             label="reference sinusoid y_ref (§4.2)")
     handles += top.plot(t, y, color=ACCENT, lw=1.1, zorder=4, label="hip height y_hip")
     top.set_ylabel(SYMBOLS["hip_y"])
-    lo, hi = np.nanmin(np.r_[y, fy if fy else y]), np.nanmax(np.r_[y, ref[np.isfinite(ref)] if np.isfinite(ref).any() else y])
-    top.set_ylim(lo - 0.08 * (hi - lo), hi + 0.55 * (hi - lo))      # headroom for the legend
+    values = np.concatenate([y, np.asarray(fy, float), ref if has_ref else y])
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    span = max(hi - lo, 1e-3)
+    top.set_ylim(lo - 0.08 * span, hi + 0.55 * span)      # headroom for the legend
     top.legend(handles=handles, loc="upper center", ncols=2, fontsize=FONT_PT, frameon=True, framealpha=0.9)
-    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps "
-                  "(the hip should rise and fall once per step)", loc="left")
+    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps; it rises and falls once per step",
+                  loc="left")
     bottom.axhline(0.0, color="#777777", lw=0.8)
-    if np.isfinite(ref).any():
+    if has_ref:
         bottom.plot(t, 1000.0 * (y - ref), color=ACCENT, lw=1.0)
-    bottom.set_ylabel("y_hip − y_ref (mm)")
+    bottom.set_ylabel("y_hip − y_ref\n(mm)")
     bottom.set_xlabel("t (s), walk time from the first heel strike")
     bottom.set_xlim(0, walk_end(run))
     return fig
@@ -214,12 +233,16 @@ PLOTS = {
 
 def render_plots(run, names=None) -> dict[str, tuple[str, bytes]]:
     """Every plot of ``run`` (or those in ``names``) as name -> (file name, PNG bytes), ready for
-    :func:`klaw_ocp.io.writers.write_rendered` into ``<results>/plots/``."""
-    unknown = sorted(set(names or ()) - set(PLOTS))
+    :func:`klaw_ocp.io.writers.write_rendered` into ``<results>/plots/``. Figures are drawn one
+    after the other; each PNG is compressed on a worker thread while the next one is drawn."""
+    from concurrent.futures import ThreadPoolExecutor
+    names = list(PLOTS) if names is None else list(names)
+    unknown = sorted(set(names) - set(PLOTS))
     if unknown:
         raise ConfigError(out_of_range("plot names", unknown, f"any of {sorted(PLOTS)}"))
-    rendered = {}
-    for name in (names or PLOTS):
-        filename, figure = PLOTS[name]
-        rendered[name] = (filename, png_bytes(figure(run)))
-    return rendered
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        pending = {}
+        for name in names:
+            filename, figure = PLOTS[name]
+            pending[name] = (filename, pool.submit(encode_png, figure_pixels(figure(run))))
+        return {name: (filename, future.result()) for name, (filename, future) in pending.items()}

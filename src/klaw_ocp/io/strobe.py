@@ -26,14 +26,15 @@ import math
 import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MultipleLocator
 
-from .plot_style import FONT_PT, LEG_COLOURS, new_figure, style_axes
+from .plot_style import FONT_PT, LEG_COLOURS, axes_column, new_figure, style_axes
 
 TRUNK_COLOUR = "#555555"
 GROUND_COLOUR = "#8c6d46"
 POSE_SPACING_M = 0.1     # automatic ``every``: the hip travels about this far between two poses
-M_PER_INCH = 0.6         # drawing scale of legs.png
-MAX_PANEL_M = 8.4        # longest x span of one panel (14 in at M_PER_INCH)
+M_PER_INCH = 0.7         # drawing scale of legs.png
+MAX_PANEL_M = 8.4        # longest x span of one panel (12 in at M_PER_INCH)
 _THIN = {"lw": 0.7, "alpha": 0.55}
 _BOLD = {"lw": 1.8, "alpha": 1.0}
 
@@ -105,10 +106,12 @@ def draw_ground(ax, x0: float, x1: float) -> None:
 
 
 def draw_strobe(ax, run, legs=("right", "left"), every: int | None = None, t_range=None,
-                upper_body: bool | None = None, hip_path: bool = True, footfalls: bool = True) -> dict:
+                upper_body: bool | None = None, hip_path: bool = True, footfalls: bool = True,
+                ground: bool = True) -> dict:
     """A strobe of ``run`` on ``ax``: the poses of :func:`strobe_rows` (heel-strike poses bold),
-    ``legs`` in LEG_COLOURS, the upper body (default: when both legs are drawn), the hip path and
-    the stance ankles on the ground. Returns {"rows", "x_range", "y_max"} of what was drawn."""
+    ``legs`` in LEG_COLOURS, the upper body (default: when both legs are drawn), the hip path, the
+    stance ankles on the ground and (``ground``) the ground under the poses. The axis limits and
+    aspect are the caller's. Returns {"rows", "x_range", "y_max"} of what was drawn."""
     legs = tuple(legs)
     bad = [leg for leg in legs if leg not in LEG_COLOURS]
     if bad or not legs:
@@ -138,8 +141,10 @@ def draw_strobe(ax, run, legs=("right", "left"), every: int | None = None, t_ran
             ax.plot(xs, [0.0] * len(xs), ls="none", marker="^", ms=5, color=LEG_COLOURS[leg], mec="#000000",
                     mew=0.5, zorder=6, clip_on=False)
     every_pts = np.concatenate([points[k] for k in ("hip", "stance_ankle", "knee", "swing_ankle", "head")])
-    return {"rows": rows, "x_range": (float(every_pts[:, 0].min()), float(every_pts[:, 0].max())),
-            "y_max": float(every_pts[:, 1].max())}
+    x_range = (float(every_pts[:, 0].min()), float(every_pts[:, 0].max()))
+    if ground:
+        draw_ground(ax, x_range[0] - 0.2, x_range[1] + 0.2)
+    return {"rows": rows, "x_range": x_range, "y_max": float(every_pts[:, 1].max())}
 
 
 def sample_at(run, t: float) -> int:
@@ -202,8 +207,9 @@ def _legend_handles(legs, upper_body: bool) -> list:
 
 
 def legs_figure(run, legs=("right", "left"), every: int | None = None):
-    """``legs.png``: the strobe of :func:`draw_strobe` over the whole walk at one scale, in as many
-    panels (rows) as keep each under MAX_PANEL_M, as the paper's figure 8."""
+    """``legs.png``: the strobe of :func:`draw_strobe` over the whole walk at one scale
+    (M_PER_INCH, equal aspect), in as many panels (rows) as keep each under MAX_PANEL_M, as the
+    paper's figure 8."""
     legs = tuple(legs)
     if not run.steps or len(run.table["t"]) == 0:
         fig = new_figure(8.0, 3.0)
@@ -216,9 +222,7 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     every = auto_every(run, POSE_SPACING_M if upper else POSE_SPACING_M / 2) if every is None else every
     all_points = pose_points(run, np.arange(len(run.table["t"])))
     xs = np.concatenate([all_points[k][:, 0] for k in ("hip", "stance_ankle", "swing_ankle", "head")])
-    span = float(xs.max() - xs.min())
-    n_panels = max(1, math.ceil(span / MAX_PANEL_M))
-    groups = _panels(run, n_panels)
+    groups = _panels(run, max(1, math.ceil(float(xs.max() - xs.min()) / MAX_PANEL_M)))
     ranges = []
     for a, b in groups:
         mask = (all_points["step"] >= a) & (all_points["step"] <= b)
@@ -227,26 +231,31 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     width_m = max(hi - lo for lo, hi in ranges) + 0.3
     y_top = float(max(all_points["head"][:, 1].max() if upper else 0.0, all_points["hip"][:, 1].max())) + 0.08
     y_bottom = -0.08
-    fig_w = max(8.0, width_m / M_PER_INCH + 1.0)
-    panel_h = (y_top - y_bottom) / M_PER_INCH + 0.75
-    fig = new_figure(fig_w, 0.6 + panel_h * len(groups))
-    axes = np.atleast_1d(fig.subplots(len(groups), 1, squeeze=False)[:, 0])
+    # fixed layout, inches: the axes are exactly the drawing at M_PER_INCH
+    left, right, top, gap, bottom = 0.75, 0.3, 0.62, 0.72, 0.9
+    ax_w, ax_h = width_m / M_PER_INCH, (y_top - y_bottom) / M_PER_INCH
+    fig_w = max(8.0, left + ax_w + right)
+    fig = new_figure(fig_w, top + len(groups) * ax_h + (len(groups) - 1) * gap + bottom, layout=None)
+    axes = axes_column(fig, [ax_h] * len(groups), left, fig_w - left - ax_w, top, gap, sharex=False)
     for ax, (a, b), (lo, hi) in zip(axes, groups, ranges):
         style_axes(ax)
         t0 = run.steps[a]["t_start_s"]
         t1 = run.steps[b]["t_start_s"] + run.steps[b]["t_step_s"]
         x0 = lo - 0.15
         draw_ground(ax, x0, x0 + width_m)
-        draw_strobe(ax, run, legs=legs, every=every, t_range=(t0, t1), upper_body=upper)
+        draw_strobe(ax, run, legs=legs, every=every, t_range=(t0, t1), upper_body=upper, ground=False)
         ax.set_xlim(x0, x0 + width_m)
         ax.set_ylim(y_bottom, y_top)
         ax.set_aspect("equal", adjustable="box")
+        ax.yaxis.set_major_locator(MultipleLocator(0.5))
+        ax.xaxis.set_major_locator(MultipleLocator(1.0 if width_m < 12 else 2.0))
         ax.set_ylabel("y (m)")
         ax.set_title(f"steps {a}–{b}, t = {t0:.2f}–{t1:.2f} s", loc="left", fontsize=FONT_PT + 1)
     axes[-1].set_xlabel("x (m), forward from the first stance ankle")
     which = " and ".join(legs) + (" legs" if len(legs) == 2 else " leg")
+    height = fig.get_size_inches()[1]
     fig.suptitle(f"Strobe of the dynamic model (paper's figure 8), {which}, a pose every {every} samples\n"
-                 f"{run.label}", fontsize=FONT_PT + 2)
-    fig.legend(handles=_legend_handles(legs, upper), loc="outside lower center", ncols=6, fontsize=FONT_PT,
-               frameon=False)
+                 f"{run.label}", fontsize=FONT_PT + 2, y=1 - 0.08 / height, va="top")
+    fig.legend(handles=_legend_handles(legs, upper), loc="lower center", bbox_to_anchor=(0.5, 0.06 / height),
+               ncols=6, fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig
