@@ -164,7 +164,7 @@ def _annotate_step(ax, run, k: int) -> list[str]:
     t_toe, t_hs = t0 + step["t_ds_s"], t0 + step["t_step_s"]
     nxt = steps[k + 1] if k + 1 < len(steps) else None
     top, bottom = max(rows.values()), min(rows.values())
-    outer = {leg: (rows[leg] + 0.55 if rows[leg] == top else rows[leg] - 0.5) for leg in LEGS}
+    outer = {leg: (rows[leg] + 0.6 if rows[leg] == top else rows[leg] - 0.5) for leg in LEGS}
     mid = 0.5 * (top + bottom)
     _dimension(ax, t0, t_hs, mid + 0.2, "t_step", above=True)
     _dimension(ax, t0, t_toe, mid - 0.2, "t_ds", above=False)
@@ -223,7 +223,7 @@ def gait_diagram_figure(run):
     t1 = run.steps[k + 1]["t_start_s"] + run.steps[k + 1]["t_ds_s"] if k + 1 < len(run.steps) else end
     margin = 0.3 * step["t_step_s"]
     zoom.set_xlim(max(0.0, t0 - margin), min(end, t1 + margin))
-    zoom.set_ylim(-1.0, 2.6)
+    zoom.set_ylim(-1.0, 2.65)
     zoom.set_title(f"Step {k} as in the paper's figure 3 (eq. 2: t_step = t_stance − t_ds = t_swing + t_ds)",
                    loc="left")
     lines = _annotate_step(zoom, run, k)

@@ -16,8 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plot_style import FONT_PT, LEG_COLOURS, RUN_COLOURS, new_figure, style_axes
+from matplotlib.lines import Line2D
+
+from .plot_style import FONT_PT, LEG_COLOURS, RUN_COLOURS, SUBPHASE_COLOURS, new_figure, style_axes
 from .strobe import draw_posture, draw_strobe
+
+
+ROLE_COLOURS = {"stance": SUBPHASE_COLOURS["stance"], "landing": SUBPHASE_COLOURS["swing2"]}
 
 
 def _step_spans(run):
@@ -57,7 +62,7 @@ def _heel_strike_time(run) -> tuple[int, float]:
 
 def fig10_figure(runs, paper: dict):
     """Figure 10: the heel-strike posture of the natural, short- and long-step walks."""
-    fig = new_figure(12.0, 4.6)
+    fig = new_figure(12.0, 6.6)
     axes = fig.subplots(1, len(runs), sharey=True)
     keys = ("natural", "short", "long")
     titles = {"natural": "natural walk (only v given)", "short": "short steps (v and sl = 0.50 m)",
@@ -65,7 +70,15 @@ def fig10_figure(runs, paper: dict):
     for ax, run, key in zip(np.atleast_1d(axes), runs, keys):
         k, t = _heel_strike_time(run)
         step = run.steps[k]
-        draw_posture(ax, run, t - 1e-9, origin_at=0.0)   # the landing leg still swinging, knee straight
+        stance = step["stance_leg"]
+        landing = "left" if stance == "right" else "right"
+        # colour by role, not by side: the middle step's stance leg is the right or left one
+        draw_posture(ax, run, t - 1e-9, origin_at=0.0,     # the landing leg still swinging, knee straight
+                     colours={stance: ROLE_COLOURS["stance"], landing: ROLE_COLOURS["landing"]})
+        ax.set_xlim(-0.25, 1.3)          # one scale for the three walks
+        ax.set_ylim(-0.1, 1.9)
+        # no fixed aspect (it fights the constrained layout and clips the titles): the figure's
+        # size makes a metre about as long across as up
         ours = f"sl = {step['step_length_m']:.3f} m, sf = {step['step_frequency_spm']:.1f} steps/min"
         ref = paper.get(key, {})
         theirs = f"paper: sl = {ref.get('sl_m', float('nan')):.2f} m, sf = {ref.get('sf_spm', float('nan')):.1f}"
@@ -73,8 +86,12 @@ def fig10_figure(runs, paper: dict):
         ax.set_xlabel("x from the stance ankle (m)")
         style_axes(ax)
     np.atleast_1d(axes)[0].set_ylabel("height (m)")
-    fig.suptitle("Figure 10: heel strike of three walks at v = 5 km/h (the landing leg in front)",
-                 fontsize=FONT_PT + 2)
+    fig.legend(handles=[
+        Line2D([], [], color=ROLE_COLOURS["stance"], lw=2.4, label="stance leg (telescope, w)"),
+        Line2D([], [], color=ROLE_COLOURS["landing"], lw=2.4, label="landing swing leg (thigh, shank)"),
+        Line2D([], [], color="0.3", lw=2.4, label="upper body")],
+        fontsize=FONT_PT, loc="outside lower center", ncols=3,
+        title="Figure 10: heel strike of three walks at v = 5 km/h, the landing leg in front", title_fontsize=FONT_PT + 2)
     return fig
 
 

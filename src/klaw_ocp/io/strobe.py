@@ -28,6 +28,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
+from ..errors import ConfigError, out_of_range
 from .plot_style import FONT_PT, LEG_COLOURS, axes_column, new_figure, style_axes
 
 TRUNK_COLOUR = "#555555"
@@ -73,7 +74,7 @@ def strobe_rows(run, every: int | None = None, t_range=None) -> tuple[np.ndarray
     step's first sample and the walk's last one)."""
     every = auto_every(run) if every is None else int(every)
     if every < 1:
-        raise ValueError(f"every: got {every!r}, allowed an integer >= 1")
+        raise ConfigError(out_of_range("every", every, "an integer >= 1"))
     t, step = np.asarray(run.table["t"], float), np.asarray(run.table["step"])
     n = len(t)
     if n == 0:
@@ -115,7 +116,7 @@ def draw_strobe(ax, run, legs=("right", "left"), every: int | None = None, t_ran
     legs = tuple(legs)
     bad = [leg for leg in legs if leg not in LEG_COLOURS]
     if bad or not legs:
-        raise ValueError(f"legs: got {legs!r}, allowed one or both of {tuple(LEG_COLOURS)}")
+        raise ConfigError(out_of_range("legs", legs, f"one or both of {tuple(LEG_COLOURS)}"))
     upper_body = len(legs) == 2 if upper_body is None else upper_body
     rows, bold = strobe_rows(run, every, t_range)
     if rows.size == 0:
@@ -124,12 +125,11 @@ def draw_strobe(ax, run, legs=("right", "left"), every: int | None = None, t_ran
     for style, mask in ((_THIN, ~bold), (_BOLD, bold)):
         sub = {k: v[mask] for k, v in points.items()}
         for key, lines in _segments(sub, legs, upper_body).items():
-            if lines:
-                colour = TRUNK_COLOUR if key == "trunk" else LEG_COLOURS[key]
+            if lines:      # the upper body fainter than the legs: it barely moves
                 trunk = key == "trunk"
-                kw = {**style, "alpha": style["alpha"] * (0.55 if trunk else 1.0)}
-                ax.add_collection(LineCollection(lines, colors=colour, capstyle="round", joinstyle="round",
-                                                 zorder=3 if trunk else 4, **kw))
+                ax.add_collection(LineCollection(
+                    lines, colors=TRUNK_COLOUR if trunk else LEG_COLOURS[key], capstyle="round", joinstyle="round",
+                    zorder=3 if trunk else 4, lw=style["lw"], alpha=style["alpha"] * (0.55 if trunk else 1.0)))
     t = run.table["t"]
     window = np.ones(len(t), bool) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
     if hip_path:
@@ -152,7 +152,7 @@ def sample_at(run, t: float) -> int:
     that opens the new step."""
     times = np.asarray(run.table["t"], float)
     if times.size == 0:
-        raise ValueError(f"t: got {t!r}, allowed a time of a walk with samples (this one has none)")
+        raise ConfigError(out_of_range("t", t, "a time of a walk with samples (this one has none)"))
     i = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 1))
     if i + 1 < times.size and abs(times[i + 1] - t) < abs(times[i] - t):
         i += 1
@@ -231,10 +231,13 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     width_m = max(hi - lo for lo, hi in ranges) + 0.3
     y_top = float(max(all_points["head"][:, 1].max() if upper else 0.0, all_points["hip"][:, 1].max())) + 0.08
     y_bottom = -0.08
-    # fixed layout, inches: the axes are exactly the drawing at M_PER_INCH
-    left, right, top, gap, bottom = 0.75, 0.3, 0.62, 0.72, 0.9
+    # fixed layout, inches: the axes are exactly the drawing at M_PER_INCH, centred
+    handles = _legend_handles(legs, upper)
     ax_w, ax_h = width_m / M_PER_INCH, (y_top - y_bottom) / M_PER_INCH
-    fig_w = max(8.0, left + ax_w + right)
+    fig_w = max(8.0, 0.75 + ax_w + 0.3)
+    ncols = len(handles) if fig_w >= 10.5 else 3          # the legend needs about 10 in in one row
+    top, gap, bottom = 0.82, 0.72, 0.62 + 0.25 * -(-len(handles) // ncols)
+    left = 0.75 + (fig_w - 0.75 - ax_w - 0.3) / 2
     fig = new_figure(fig_w, top + len(groups) * ax_h + (len(groups) - 1) * gap + bottom, layout=None)
     axes = axes_column(fig, [ax_h] * len(groups), left, fig_w - left - ax_w, top, gap, sharex=False)
     for ax, (a, b), (lo, hi) in zip(axes, groups, ranges):
@@ -256,6 +259,6 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     height = fig.get_size_inches()[1]
     fig.suptitle(f"Strobe of the dynamic model (paper's figure 8), {which}, a pose every {every} samples\n"
                  f"{run.label}", fontsize=FONT_PT + 2, y=1 - 0.08 / height, va="top")
-    fig.legend(handles=_legend_handles(legs, upper), loc="lower center", bbox_to_anchor=(0.5, 0.06 / height),
-               ncols=6, fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
+    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=ncols,
+               fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig
