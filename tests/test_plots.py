@@ -68,11 +68,11 @@ def _decode(png: bytes) -> np.ndarray:
 @pytest.mark.parametrize("name", list(PLOTS))
 def test_every_plot_renders_a_png_of_its_figure_size_that_is_not_blank(run, name):
     filename, figure = PLOTS[name]
-    assert filename == f"{'legs' if name == 'legs' else name}.png"
+    assert filename == f"{name}.png"
     fig = figure(run)
     width, height = fig.get_size_inches() * DPI
     image = _decode(png_bytes(fig))
-    assert image.shape[:2] == (round(height), round(width))
+    assert abs(image.shape[0] - height) < 1 and abs(image.shape[1] - width) < 1   # Agg truncates
     rgb = np.round(image[..., :3] * 255).astype(np.int32)
     ink = np.any(rgb < 230, axis=-1).mean()
     colours = len(np.unique((rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]))

@@ -5,13 +5,11 @@ Colours are the Okabe-Ito palette (colour-blind safe), one per subphase of a ste
 hind leg's double support, swing1, swing2, swing3), so a reader learns them once. Figures are
 drawn on the Agg canvas directly (``matplotlib.figure.Figure``, no pyplot and no global backend),
 which needs no display and is safe in worker processes. :func:`png_bytes` draws a figure once and
-writes the PNG itself (:func:`encode_png`): ``savefig`` draws twice and Pillow's adaptive filter
-is slow, together twice the time of the plots of a run.
+hands the pixels to Pillow (:func:`encode_png`): ``savefig`` would draw it twice.
 """
 from __future__ import annotations
 
-import struct
-import zlib
+import io
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -43,7 +41,7 @@ SYMBOLS = {
     "F_theta3": "F_θ3 (N·m)", "F_theta4": "F_θ4 (N·m)",
 }
 FORCE_COLUMNS = ("F_w", "pa", "F_theta1", "F_theta2", "F_theta3", "F_theta4")
-#: zlib level of the PNGs (:func:`encode_png`): about as small as level 6 and twice as fast
+#: zlib level of the PNGs (:func:`encode_png`): about as small as Pillow's default 6, a third faster
 PNG_COMPRESS_LEVEL = 3
 
 
@@ -102,28 +100,15 @@ def figure_pixels(fig: Figure) -> np.ndarray:
         fig.dpi = dpi
 
 
-def _png_chunk(tag: bytes, data: bytes) -> bytes:
-    return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-
 def encode_png(pixels: np.ndarray) -> bytes:
-    """An (h, w, 3) uint8 array as an 8-bit RGB PNG at :data:`DPI` (PNG spec: every row with the
-    "Up" filter, zlib level :data:`PNG_COMPRESS_LEVEL`). Plots repeat down their columns, so this
-    is as small as Pillow's adaptive filtering and about twice as fast to write."""
-    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
-    h, w = pixels.shape[:2]
-    flat = pixels.reshape(h, 3 * w)
-    rows = np.empty((h, 3 * w + 1), np.uint8)
-    rows[:, 0] = 2                                   # filter type 2, Up: byte minus the one above
-    rows[0, 0] = 0                                   # (the first row has none above: type 0)
-    rows[0, 1:] = flat[0]
-    np.subtract(flat[1:], flat[:-1], out=rows[1:, 1:])   # uint8 arithmetic wraps mod 256, as PNG wants
-    per_metre = round(DPI / 0.0254)
-    return (b"\x89PNG\r\n\x1a\n"
-            + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-            + _png_chunk(b"pHYs", struct.pack(">IIB", per_metre, per_metre, 1))
-            + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), PNG_COMPRESS_LEVEL))
-            + _png_chunk(b"IEND", b""))
+    """An (h, w, 3) uint8 array as a PNG at :data:`DPI`, written by Pillow (matplotlib's own PNG
+    writer) at zlib level :data:`PNG_COMPRESS_LEVEL`: the files are as small as at Pillow's
+    default level 6 (plots are mostly flat colour) and take a third less time to write."""
+    from PIL import Image
+    buffer = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8), "RGB").save(
+        buffer, format="png", compress_level=PNG_COMPRESS_LEVEL, dpi=(DPI, DPI))
+    return buffer.getvalue()
 
 
 def png_bytes(fig: Figure) -> bytes:
