@@ -117,7 +117,7 @@ class SolverConfig(BaseModel):
 
 class OutputConfig(BaseModel):
     """Where results go (default ``results/<name>``), whether to draw the plots of the run
-    (``plots/``, docs/plots.md) and whether to render an animation."""
+    (``plots/``, docs/experiments.md) and whether to render an animation."""
 
     model_config = _STRICT
     dir: Optional[str] = None

@@ -251,7 +251,7 @@ def readme(n: dict, comparison_text: str) -> str:
         "kernels already compiled; the times change from machine to machine and run to run. The paper's 37.3 s "
         "was 3× slower than real time; docs/performance.md has the benchmark.",
         "",
-        "Regenerate everything with `klaw-ocp reproduce` (about a minute).",
+        "Regenerate everything with `klaw-ocp reproduce` (a few seconds).",
         "",
     ]
     return "\n".join(lines)

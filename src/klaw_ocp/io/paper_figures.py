@@ -31,8 +31,10 @@ def _step_spans(run):
 
 def fig8_figure(slow, fast):
     """Figure 8: one leg's strobe and the hip height of two start-stop walks (``slow`` above)."""
-    fig = new_figure(13.0, 8.4)
-    grid = fig.add_gridspec(4, 1, height_ratios=[2.6, 1.0, 2.6, 1.0])
+    # strobe panels about as tall as their metre of height is wide in x (the 2 km/h walk covers
+    # 4.3 m, the 5 km/h walk 5.1 m), so the legs are not foreshortened
+    fig = new_figure(13.0, 10.6)
+    grid = fig.add_gridspec(4, 1, height_ratios=[3.7, 1.0, 3.2, 1.0])
     for row, (run, title) in enumerate(((slow, "top: 2 km/h, 4 cycles"), (fast, "bottom: 5 km/h, 3 cycles"))):
         ax = fig.add_subplot(grid[2 * row])
         draw_strobe(ax, run, legs=("right",))
