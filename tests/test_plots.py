@@ -263,3 +263,18 @@ def test_posture_at_a_heel_strike_is_the_new_steps_first_sample(natural):
     assert drawn["stance_ankle"][0] == pytest.approx(0.0) and drawn["stance_leg"] == natural.steps[k]["stance_leg"]
     assert drawn["hip"][0] - drawn["stance_ankle"][0] == pytest.approx(
         natural.table["hip_x"][row] - natural.steps[k]["origin_x_m"])
+
+
+def test_the_hip_height_plot_shows_one_bump_per_step(natural):
+    """What hip_height.png must let a user see (§4.2): within every steady step the hip rises to
+    one peak and falls again, and the reference it follows does the same."""
+    t, y, ref = natural.table["t"], natural.table["hip_y"], natural.table["hip_y_ref"]
+    for step in natural.steps:
+        inside = (t > step["t_start_s"]) & (t < step["t_start_s"] + step["t_step_s"])
+        for curve in (y[inside], ref[inside]):
+            rises = np.diff(curve) > 0
+            # one rise then one fall (a sign change of the slope from + to -), ignoring the
+            # 2-4 mm dip of the monitored stance right after heel strike
+            peaks = np.flatnonzero(rises[:-1] & ~rises[1:])
+            big = [p for p in peaks if curve[p + 1] - curve.min() > 0.5 * (curve.max() - curve.min())]
+            assert len(big) == 1, (step["index"], peaks)

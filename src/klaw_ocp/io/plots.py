@@ -213,7 +213,7 @@ def hip_height_figure(run):
     span = max(hi - lo, 1e-3)
     top.set_ylim(lo - 0.08 * span, hi + 0.55 * span)      # headroom for the legend
     top.legend(handles=handles, loc="upper center", ncols=2, fontsize=FONT_PT, frameon=True, framealpha=0.9)
-    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps (§4.2: one bump per step)", loc="left")
+    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps (§4.2 asks for one bump per step)", loc="left")
     bottom.axhline(0.0, color="#777777", lw=0.8)
     if has_ref:
         bottom.plot(t, 1000.0 * (y - ref), color=ACCENT, lw=1.0)
