@@ -1,5 +1,6 @@
 """Shared fixtures."""
 import pytest
+import yaml
 
 from klaw_ocp.errors import ConvergenceError
 
@@ -32,3 +33,12 @@ def fresh_kernel_cache(tmp_path_factory):
         os.environ.pop("KLAW_OCP_CACHE_DIR", None)
     else:
         os.environ["KLAW_OCP_CACHE_DIR"] = previous
+
+
+@pytest.fixture
+def short_config(tmp_path):
+    """A two-step walk at 5 km/h (1.8 m, 80 kg): the quickest config a command can run."""
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump({"name": "short", "body": {"height": 1.8, "mass": 80},
+                                    "walk": {"speed": 5.0, "steps": 2}}))
+    return path

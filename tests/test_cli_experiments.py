@@ -18,14 +18,6 @@ CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
 PLOT_FILES = {"hip_height.png", "gait_diagram.png", "torques.png", "states.png", "legs.png"}
 
 
-@pytest.fixture
-def two_steps(tmp_path):
-    path = tmp_path / "two.yaml"
-    path.write_text(yaml.safe_dump({"name": "two", "body": {"height": 1.8, "mass": 80},
-                                    "walk": {"speed": 5.0, "steps": 2}}))
-    return path
-
-
 def _one_error_line(capsys) -> str:
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
@@ -47,9 +39,9 @@ def no_solving(monkeypatch):
 
 # ---------------------------------------------------------------------------------------- --set
 
-def test_set_overrides_fields_of_every_section(two_steps, tmp_path):
+def test_set_overrides_fields_of_every_section(short_config, tmp_path):
     out = tmp_path / "o"
-    code = main(["run", str(two_steps), "--out", str(out), "--quiet", "--no-plots",
+    code = main(["run", str(short_config), "--out", str(out), "--quiet", "--no-plots",
                  "--set", "walk.speed=4", "--set", "attributes.toe_clearance=0.03", "--set", "body.height=1.65"])
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -69,9 +61,9 @@ def test_set_overrides_fields_of_every_section(two_steps, tmp_path):
     ("=4", "--set"),                            # no path
     ("attributes.no_such=1", "no_such"),        # an unknown attribute
 ])
-def test_set_refuses_a_bad_path_or_value_in_one_line(override, field, two_steps, tmp_path, capsys, no_solving):
+def test_set_refuses_a_bad_path_or_value_in_one_line(override, field, short_config, tmp_path, capsys, no_solving):
     out = tmp_path / "o"
-    assert main(["run", str(two_steps), "--out", str(out), "--quiet", "--set", override]) == 2
+    assert main(["run", str(short_config), "--out", str(out), "--quiet", "--set", override]) == 2
     line = _one_error_line(capsys)
     assert field in line and "allowed" in line
     assert not out.exists()
@@ -130,9 +122,9 @@ def test_validate_imports_no_solver_and_compiles_nothing(tmp_path):
 
 # --------------------------------------------------------------------- resolved config, plots
 
-def test_resolved_config_reproduces_the_walk_byte_for_byte(two_steps, tmp_path):
+def test_resolved_config_reproduces_the_walk_byte_for_byte(short_config, tmp_path):
     first, second = tmp_path / "first", tmp_path / "second"
-    assert main(["run", str(two_steps), "--out", str(first), "--quiet", "--no-plots",
+    assert main(["run", str(short_config), "--out", str(first), "--quiet", "--no-plots",
                  "--method", "plain-shooting", "--set", "walk.speed=4.5"]) == 0
     resolved = yaml.safe_load((first / "config.resolved.yaml").read_text())
     assert resolved["solver"]["method"] == "plain-shooting"          # the flag is folded in
@@ -143,9 +135,9 @@ def test_resolved_config_reproduces_the_walk_byte_for_byte(two_steps, tmp_path):
         (second / "config.resolved.yaml").read_text().split("\n", 2)[2]
 
 
-def test_run_writes_the_plots_and_plot_redraws_them_without_solving(two_steps, tmp_path, monkeypatch, capsys):
+def test_run_writes_the_plots_and_plot_redraws_them_without_solving(short_config, tmp_path, monkeypatch, capsys):
     out = tmp_path / "o"
-    assert main(["run", str(two_steps), "--out", str(out), "--quiet"]) == 0
+    assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 0
     assert {p.name for p in (out / "plots").iterdir()} == PLOT_FILES
     for png in (out / "plots").iterdir():
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_mode & 0o044 == 0o044
@@ -156,12 +148,12 @@ def test_run_writes_the_plots_and_plot_redraws_them_without_solving(two_steps, t
     assert {p.name for p in redrawn.iterdir()} == PLOT_FILES
 
 
-def test_no_plots_skips_them_and_removes_stale_ones(two_steps, tmp_path):
+def test_no_plots_skips_them_and_removes_stale_ones(short_config, tmp_path):
     out = tmp_path / "o"
-    assert main(["run", str(two_steps), "--out", str(out), "--quiet"]) == 0
-    assert main(["run", str(two_steps), "--out", str(out), "--quiet", "--no-plots"]) == 0
+    assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 0
+    assert main(["run", str(short_config), "--out", str(out), "--quiet", "--no-plots"]) == 0
     assert not any((out / "plots").iterdir())
-    assert main(["run", str(two_steps), "--out", str(out), "--quiet", "--set", "output.plots=false"]) == 0
+    assert main(["run", str(short_config), "--out", str(out), "--quiet", "--set", "output.plots=false"]) == 0
     assert not any((out / "plots").iterdir())
 
 
@@ -177,22 +169,22 @@ def _csv_rows(path):
         return list(csv.DictReader(handle))
 
 
-def test_compare_one_config_runs_both_modes_and_matches_two_separate_runs(two_steps, tmp_path, capsys):
+def test_compare_one_config_runs_both_modes_and_matches_two_separate_runs(short_config, tmp_path, capsys):
     out = tmp_path / "cmp"
-    assert main(["compare", str(two_steps), "--out", str(out), "--quiet"]) == 0
+    assert main(["compare", str(short_config), "--out", str(out), "--quiet"]) == 0
     rows = _csv_rows(out / "comparison.csv")
     assert len(rows) == 2 * 4 * 2                                   # steps x subphases x modes
-    assert {r["run"] for r in rows} == {"two (multiple-shooting, monitored stance)",
-                                        "two (plain-shooting, monitored stance)"}
+    assert {r["run"] for r in rows} == {"short (multiple-shooting, monitored stance)",
+                                        "short (plain-shooting, monitored stance)"}
     assert (out / "comparison.png").read_bytes()[:4] == b"\x89PNG"
     table = capsys.readouterr().out
     assert "hip height" in table and "iterations" in table
     # the same two walks run separately
     for method in ("multiple-shooting", "plain-shooting"):
-        assert main(["run", str(two_steps), "--out", str(tmp_path / method), "--quiet", "--no-plots",
+        assert main(["run", str(short_config), "--out", str(tmp_path / method), "--quiet", "--no-plots",
                      "--method", method]) == 0
     ms, ps = (json.loads((tmp_path / m / "summary.json").read_text()) for m in ("multiple-shooting", "plain-shooting"))
-    for row in (r for r in rows if r["run"].startswith("two (plain")):
+    for row in (r for r in rows if r["run"].startswith("short (plain")):
         k, name = int(row["step"]), row["subphase"]
         a = next(s for s in ms["steps"][k]["subphases"] if s["name"] == name)["parameters"]
         b = next(s for s in ps["steps"][k]["subphases"] if s["name"] == name)["parameters"]
@@ -210,9 +202,9 @@ def test_compare_one_config_runs_both_modes_and_matches_two_separate_runs(two_st
     assert separate["runs"][1]["hip_y"]["value"] == pytest.approx(direct, rel=1e-9, abs=1e-15)
 
 
-def test_compare_of_results_folders_solves_nothing(two_steps, tmp_path, monkeypatch, capsys):
+def test_compare_of_results_folders_solves_nothing(short_config, tmp_path, monkeypatch, capsys):
     for method in ("multiple-shooting", "plain-shooting"):
-        assert main(["run", str(two_steps), "--out", str(tmp_path / method), "--quiet", "--no-plots",
+        assert main(["run", str(short_config), "--out", str(tmp_path / method), "--quiet", "--no-plots",
                      "--method", method]) == 0
     import klaw_ocp.walk
     monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", lambda *a, **k: pytest.fail("solved a walk"))
@@ -230,9 +222,9 @@ def test_compare_of_results_folders_solves_nothing(two_steps, tmp_path, monkeypa
     (["--method", "plain-shooting"], "compare"),                     # one run is nothing to compare
     (["--set", "walk.speed=-2"], "walk.speed"),
 ])
-def test_compare_refuses_bad_input_before_solving(args, field, two_steps, tmp_path, capsys, no_solving):
+def test_compare_refuses_bad_input_before_solving(args, field, short_config, tmp_path, capsys, no_solving):
     out = tmp_path / "cmp"
-    assert main(["compare", str(two_steps), "--out", str(out), *args]) == 2
+    assert main(["compare", str(short_config), "--out", str(out), *args]) == 2
     assert field in _one_error_line(capsys)
     assert not out.exists()
 

@@ -3,7 +3,6 @@ import csv
 import json
 
 import pytest
-import yaml
 
 from klaw_ocp.cli import main
 
@@ -12,14 +11,6 @@ REQUIRED_COLUMNS = {"t", "step", "subphase", "w", "theta1", "theta2", "theta3", 
                     "F_theta3", "F_theta4"}
 PLAN_KEYS = {"speed_kmh", "step_length_m", "step_frequency_spm", "t_cycle_s", "t_step_s", "t_ds_s",
              "t_stance_s", "t_swing_s", "w_m", "theta1_rad", "theta3_rad"}
-
-
-@pytest.fixture
-def short_config(tmp_path):
-    path = tmp_path / "short.yaml"
-    path.write_text(yaml.safe_dump({"name": "short", "body": {"height": 1.8, "mass": 80},
-                                    "walk": {"speed": 5.0, "steps": 2}}))
-    return path
 
 
 def test_run_writes_summary_and_dynamics(short_config, tmp_path, capsys):

@@ -215,6 +215,15 @@ def test_pose_points_are_the_models_geometry(start_stop):
     assert np.allclose(np.linalg.norm(p["knee"] - p["swing_ankle"], axis=1), body["l4"])
     assert np.allclose(np.linalg.norm(p["head"] - p["hip"], axis=1), body["l2"])
     assert np.allclose(p["stance_ankle"][:, 1], body["l9"])
+    # the same geometry as the physics package's (strobe.py repeats it in numpy: the plots read
+    # results and import no CasADi)
+    from klaw_ocp.body import Body
+    from klaw_ocp.dynamics import swing_leg_points
+    model = Body(height=body["height"], mass=body["mass"])
+    for r in rows[:: max(1, len(rows) // 25)]:
+        points = swing_leg_points(model, [table["theta3"][r], table["theta4"][r]], p["hip"][r])
+        assert np.allclose(points["knee"], p["knee"][r], atol=1e-12)
+        assert np.allclose(points["ankle"], p["swing_ankle"][r], atol=1e-12)
     # the legs alternate: the swing leg of step k is the stance leg of step k + 1 ...
     assert [p["stance_leg"][table["step"] == k][0] for k in range(len(start_stop.steps))] == \
         [s["stance_leg"] for s in start_stop.steps]

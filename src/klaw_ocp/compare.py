@@ -34,8 +34,6 @@ import numpy as np
 SUBPHASES = ("stance", "swing1", "swing2", "swing3")
 #: the generalized coordinates compared sample by sample, with their units
 ANGLE_COLUMNS = {"w": "m", "theta1": "rad", "theta2": "rad", "theta3": "rad", "theta4": "rad"}
-_LEAD_COLUMNS = ("run", "step", "subphase")
-_SOLVER_COLUMNS = ("residual", "iterations", "solve_s", "nlp", "fallbacks")
 
 
 # -- labels and parameters ---------------------------------------------------------------------------

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .compare import SUBPHASES
 from .errors import ConfigError, ConvergenceError, out_of_range
 
 #: what each part of the reproduction walks: key -> config file name in the configs folder
@@ -35,7 +36,6 @@ CONFIGS = {"fig8_2kmh": "start_stop_2kmh.yaml", "fig8_5kmh": "start_stop_5kmh.ya
 PAPER = {"natural": {"sl_m": 0.77, "sf_spm": 107.5}, "short": {"sl_m": 0.50, "sf_spm": 166.7},
          "long": {"sl_m": 1.05, "sf_spm": 79.4}, "iterations": (6, 10), "cpu_s_12s_walk": 37.3,
          "cpu_machine": "SUN3-50 with floating point processor"}
-SUBPHASES = ("stance", "swing1", "swing2", "swing3")
 
 
 def check_configs(configs_dir) -> dict[str, Path]:

@@ -95,12 +95,6 @@ class RunData:
         steps = self.steps
         return steps[-1]["t_start_s"] + steps[-1]["t_step_s"] - steps[0]["t_start_s"] if steps else 0.0
 
-    def column(self, name: str) -> np.ndarray:
-        return self.table[name]
-
-    def subphase_mask(self, name: str) -> np.ndarray:
-        return self.table["subphase"] == name
-
 
 def _empty_table() -> dict:
     from ..results import COLUMNS
