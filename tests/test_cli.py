@@ -1,13 +1,17 @@
 """`klaw-ocp plan`: output, JSON shape, and one-line errors with exit code 2 (API and subprocess)."""
 import json
 import os
+import shlex
+import shutil
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import pytest
+import yaml
 
-from klaw_ocp.cli import SUBCOMMANDS, main
+from klaw_ocp.cli import SUBCOMMANDS, build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
 NATURAL = str(ROOT / "configs" / "natural_walk.yaml")
@@ -110,15 +114,43 @@ def test_argparse_errors_exit_2(capsys):
     assert code == 2 and "a COMMAND is required" in err
 
 
-def test_subcommands_are_a_registry():
-    assert set(SUBCOMMANDS) >= {"plan"}
-    assert callable(SUBCOMMANDS["plan"].handler) and callable(SUBCOMMANDS["plan"].configure)
+#: Every subcommand the CLI documents (cli.py's docstring, README): none may go missing.
+COMMANDS = {"plan", "validate", "run", "plot", "compare", "sweep", "reproduce"}
 
 
-def _cli(*argv):
+def test_subcommands_are_a_registry(capsys):
+    assert set(SUBCOMMANDS) == COMMANDS
+    code, out, _ = run_main(capsys, "--help")
+    assert code == 0
+    for name, command in SUBCOMMANDS.items():
+        assert callable(command.handler) and callable(command.configure)
+        assert isinstance(command.help, str) and len(command.help.split()) >= 4, name
+        assert name in out and command.help.split()[0] in out, name     # listed in `klaw-ocp --help`
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_every_subcommand_has_help_and_a_valid_example(capsys, name):
+    """`klaw-ocp NAME --help` describes it and ends with at least one example that parses."""
+    code, out, err = run_main(capsys, name, "--help")
+    assert code == 0 and err == ""
+    usage, _, rest = out.partition("\n\n")
+    assert usage.startswith(f"usage: klaw-ocp {name}")
+    description = rest.partition("\n\n")[0]
+    assert not description.startswith(("options:", "positional arguments:")), f"{name}: no description"
+    assert len(description.split()) >= 10, description
+    _, sep, examples = rest.rpartition("\nexample")
+    assert sep, f"no example in `klaw-ocp {name} --help`"
+    lines = [line.strip() for line in examples.partition(":")[2].splitlines() if line.strip()]
+    assert lines and all(line.startswith(f"klaw-ocp {name}") for line in lines), examples
+    for line in lines:
+        args = build_parser().parse_args(shlex.split(line)[1:])  # argparse exits on a bad example
+        assert args.command == name and args.handler is SUBCOMMANDS[name].handler
+
+
+def _cli(*argv, cwd, module="klaw_ocp.cli", timeout=60):
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
-    return subprocess.run([sys.executable, "-m", "klaw_ocp.cli", *argv], capture_output=True,
-                          text=True, cwd=ROOT, env=env, timeout=60)
+    return subprocess.run([sys.executable, "-m", module, *argv], capture_output=True,
+                          text=True, cwd=cwd, env=env, timeout=timeout)
 
 
 @pytest.mark.parametrize("argv, start", [
@@ -127,15 +159,70 @@ def _cli(*argv):
     (["plan", "--step-frequency", "190"], "klaw-ocp: error: walk.step_frequency: got 190"),
     (["plan", "--speed", "5", "--height", "0"], "klaw-ocp: error: body.height: got 0.0"),
 ])
-def test_bad_input_via_subprocess(argv, start):
-    r = _cli(*argv)
+def test_bad_input_via_subprocess(argv, start, tmp_path):
+    r = _cli(*argv, cwd=tmp_path)
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr.splitlines() == [r.stderr.strip()] and r.stderr.startswith(start), r.stderr
     assert "Traceback" not in r.stderr
 
 
-def test_plan_via_subprocess():
-    r = _cli("plan", "configs/short_steps.yaml", "--json")
+def test_plan_via_subprocess(tmp_path):
+    """From a working directory that has no configs/ of its own: the path given is the one read."""
+    assert not (tmp_path / "configs").exists()
+    r = _cli("plan", str(ROOT / "configs" / "short_steps.yaml"), "--json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     steps = json.loads(r.stdout)["steps"]
     assert len(steps) == 34 and steps[0]["step_frequency_spm"] == pytest.approx(166.67, abs=5e-3)
+
+
+def _assert_plan_json(r):
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    data = json.loads(r.stdout)
+    assert data["body"]["height"] == 1.8 and data["body"]["mass"] == 80
+    (step,) = data["steps"]
+    assert STEP_KEYS <= set(step)
+    assert step["speed_kmh"] == pytest.approx(5.0) and step["step_frequency_spm"] == pytest.approx(107.58, abs=5e-3)
+
+
+def test_python_dash_m_klaw_ocp(tmp_path):
+    """`python -m klaw_ocp` (the package's __main__) is the klaw-ocp command, exit codes included."""
+    _assert_plan_json(_cli("plan", "--speed", "5", "--json", cwd=tmp_path, module="klaw_ocp"))
+    r = _cli("plan", "--speed", "-1", cwd=tmp_path, module="klaw_ocp")
+    assert r.returncode == 2 and r.stderr.startswith("klaw-ocp: error: walk.speed: got -1.0"), r.stderr
+
+
+def _console_script():
+    # the script installed beside this interpreter first, then whatever PATH finds
+    scripts = [sysconfig.get_path("scripts"), str(Path(sys.executable).parent)]
+    return shutil.which("klaw-ocp", path=os.pathsep.join(scripts + [os.environ.get("PATH", "")]))
+
+
+def test_the_installed_console_script(tmp_path):
+    script = _console_script()
+    if script is None:
+        pytest.skip("the klaw-ocp console script is not installed")
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    r = subprocess.run([script, "plan", "--speed", "5", "--json"], capture_output=True, text=True,
+                       cwd=tmp_path, env=env, timeout=60)
+    _assert_plan_json(r)
+    r = subprocess.run([script], capture_output=True, text=True, cwd=tmp_path, env=env, timeout=60)
+    assert r.returncode == 2 and "a COMMAND is required" in r.stderr
+
+
+def test_run_writes_to_results_name_in_the_working_directory(tmp_path):
+    """`klaw-ocp run CONFIG` without --out (and no output.dir): results/<name>/ under the working
+    directory, wherever the config file is."""
+    work, elsewhere = tmp_path / "work", tmp_path / "configs"
+    work.mkdir(), elsewhere.mkdir()
+    config = elsewhere / "two_steps.yaml"
+    config.write_text(yaml.safe_dump({"name": "two_steps", "body": {"height": 1.8, "mass": 80},
+                                      "walk": {"speed": 5.0, "steps": 2}}), encoding="utf-8")
+    r = _cli("run", str(config), "--no-plots", "--quiet", cwd=work, module="klaw_ocp", timeout=300)
+    assert r.returncode == 0, r.stderr
+    out = work / "results" / "two_steps"
+    assert sorted(p.name for p in out.iterdir()) == ["config.resolved.yaml", "dynamics.csv", "summary.json"]
+    assert sorted(p.name for p in work.iterdir()) == ["results"]        # nothing else in the cwd
+    assert sorted(p.name for p in elsewhere.iterdir()) == ["two_steps.yaml"]   # nor beside the config
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["name"] == "two_steps" and summary["status"] == "ok" and summary["steps_completed"] == 2
+    assert r.stdout.strip().endswith(f"wrote {Path('results') / 'two_steps'}/")

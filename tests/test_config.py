@@ -85,7 +85,8 @@ def test_accelerate_goes_2_5_2():
 def test_defaults_and_output_dir():
     c = ExperimentConfig.from_mapping(_base(output={"dir": "/tmp/elsewhere"}))
     assert c.solver.model_dump() == {"method": "multiple-shooting", "intervals": 20, "tolerance": 1e-9,
-                                     "max_iterations": 50, "nlp": "auto", "stance": "monitored"}
+                                     "max_iterations": 50, "nlp": "auto", "stance": "monitored",
+                                     "lock_rule": "momentum"}
     assert c.output_dir() == Path("/tmp/elsewhere")
     assert c.walk.start_from_rest is False and c.walk.end_at_rest is False
 
@@ -117,6 +118,7 @@ BAD = [
     (_base(solver={"method": "euler"}), "solver.method: got 'euler', allowed one of 'multiple-shooting' or 'plain-shooting'"),
     (_base(solver={"intervals": 501}), "solver.intervals: got 501, allowed a number <= 500"),
     (_base(solver={"nlp": "snopt"}), "solver.nlp: got 'snopt', allowed one of 'auto', 'rootfinder' or 'ipopt'"),
+    (_base(solver={"lock_rule": "elastic"}), "solver.lock_rule: got 'elastic', allowed one of 'momentum' or 'zero'"),
     (_base(name="Natural Walk"), "name: got 'Natural Walk', allowed a slug of lowercase letters, digits, '_' and '-'"),
     (_base(output={"animation": 1}), "output.animation: got 1, allowed true or false"),
     ({"name": "t", "walk": {"speed": 5.0, "steps": 4}}, "body: got nothing, allowed a required value"),

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from _walk_checks import TOE_DIP_BETWEEN_NODES, dense_trajectory, record_walk, swing_foot_heights
 from klaw_ocp.errors import ConvergenceError
 from klaw_ocp.results import walk_summary, walk_table
 from klaw_ocp.walk import simulate_walk
@@ -66,12 +67,27 @@ def test_summary_reports_how_far_the_monitored_hip_dips(natural_walk):
     assert all(s["nlp"] in ("rootfinder", "bisection-secant") for e in summary["steps"] for s in e["subphases"])
 
 
-def test_toe_clears_the_ground_in_swing2(natural_walk):
-    clearance = natural_walk.spec.attributes.toe_clearance
-    for step in natural_walk.steps:
-        assert step.subphase("swing2").path_min >= -1e-7
-        assert step.heel_clearance_min > -1e-6
-        assert clearance > 0
+@pytest.mark.parametrize("method", METHODS)
+def test_toe_clears_the_ground_in_swing2_and_the_heel_comes_down_onto_it_in_swing3(method):
+    """Recomputed from the states, not read from the solver's path function at its 21 nodes: the
+    toe and heel heights of the swing foot on a dense grid (8 samples per interval, re-integrated
+    with DOP853), with the foot geometry. The toe stays above ``toe_clearance`` in swing2 (less
+    what it may dip between the nodes), and the heel stays above the ground until it strikes.
+    tests/test_walk_checks.py checks the whole swing over the envelope."""
+    recorded = record_walk(natural(3), method)
+    body, clearance = recorded.body, recorded.walk.spec.attributes.toe_clearance
+    assert clearance == pytest.approx(0.015)
+    for step in recorded.walk.steps:
+        for name in ("swing2", "swing3"):
+            problem, solution = recorded.problems[(step.index, name)]
+            dense = dense_trajectory(problem, solution)
+            assert len(dense.t) == 8 * (len(solution.t) - 1) + 1
+            toe, heel = swing_foot_heights(body, step.origin_x, name, problem.context, dense)
+            if name == "swing2":
+                assert toe.min() >= clearance - TOE_DIP_BETWEEN_NODES, step.index
+            else:
+                assert heel.min() >= -1e-6, step.index
+                assert abs(heel[-1]) < 5e-5      # it strikes at t_step (eq. 3; l11 to Table B-1's digits)
 
 
 def test_both_modes_find_the_same_torques():
@@ -130,3 +146,21 @@ def test_start_and_stop_at_rest(method):
     assert abs(x[4]) < 1e-8 and abs(x[3]) < 0.02                             # theta1d = 0, wd ~ 0
     assert "F_theta1_brake" in closing.subphase("stance").parameters
     assert max(s.residual for step in walk.steps for s in step.subphases) <= 1e-6
+
+
+@pytest.mark.parametrize("rule", ["momentum", "zero"])
+def test_the_lock_rule_is_set_from_the_config(rule):
+    """``solver.lock_rule`` reaches the walk: the knee locks at t2 by that rule (eq. 5), so swing3
+    starts from the knee-lock map of swing2's end, and the summary says which rule ran."""
+    from klaw_ocp.dynamics import knee_lock_map
+    walk = simulate_walk({**natural(2), "solver": {"lock_rule": rule}})
+    assert walk.spec.lock_rule == rule and walk_summary(walk)["solver"]["lock_rule"] == rule
+    for step in walk.steps:
+        end2 = step.subphase("swing2").states[-1]
+        start3 = step.subphase("swing3").states[0]
+        locked = knee_lock_map(walk.spec.body, end2[6:10], np.zeros(2), rule)
+        assert start3[7] == pytest.approx(locked[2], abs=1e-12)
+        if rule == "zero":      # the paper: only the knee's rate is set to zero
+            assert start3[7] == end2[8]
+        else:                   # an impulse in the knee alone changes the thigh's rate too
+            assert abs(start3[7] - end2[8]) > 1e-3

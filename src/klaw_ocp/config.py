@@ -113,6 +113,10 @@ class SolverConfig(BaseModel):
     #: "monitored": the paper's stance (pa follows the hip sinusoid by feedback; square problem);
     #: "tracking": pa free over the grid, IPOPT tracks the sinusoid under the hip floor (multiple shooting)
     stance: Literal["monitored", "tracking"] = "monitored"
+    #: what a lock does to the other rates (the stance leg reaching l1, §4.2; the knee at full
+    #: extension, eq. 5; dynamics.LOCK_RULES): "momentum" conserves every other generalized
+    #: momentum, "zero" (the paper's reading) sets only the locked rate to zero
+    lock_rule: Literal["momentum", "zero"] = "momentum"
 
 
 class OutputConfig(BaseModel):

@@ -190,4 +190,4 @@ def walk_spec(config, method: str | None = None) -> WalkSpec:
                     plans=config.plan(), method=method or solver.method, intervals=solver.intervals,
                     tolerance=solver.tolerance, max_iterations=solver.max_iterations, nlp=solver.nlp,
                     start_from_rest=config.walk.start_from_rest, end_at_rest=config.walk.end_at_rest,
-                    stance=solver.stance)
+                    stance=solver.stance, lock_rule=solver.lock_rule)

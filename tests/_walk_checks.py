@@ -1,0 +1,211 @@
+"""Support for the walk-level checks (tests/test_walk_checks.py): walks whose subphase problems are
+recorded, so that a test can re-simulate them with an integrator of its own instead of trusting
+what the solvers report about themselves.
+
+Nothing here calls a solver's integrator or kernels: trajectories between the stored samples are
+re-integrated with SciPy's DOP853 on the subphase's own right-hand side (the model the walk is
+defined by), and every geometric quantity is recomputed from the states with the forward
+kinematics of :mod:`klaw_ocp.dynamics`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from klaw_ocp.config import ExperimentConfig
+from klaw_ocp.control.stance_law import STANCE_CONTEXT
+from klaw_ocp.control.step import StepController
+from klaw_ocp.control.swing_law import SWING_CONTEXT
+from klaw_ocp.dynamics import foot_points_float
+from klaw_ocp.solvers.problem import mapped
+from klaw_ocp.walk import simulate_walk, walk_spec
+
+METHODS = ("multiple-shooting", "plain-shooting")
+
+#: The envelope's coarse grid (docs/envelope.md): speed (km/h), height (m), mass (kg), start from
+#: rest, end at rest. Every corner of the body range, both ends of the speed range, and each
+#: combination of start and stop.
+COARSE = [
+    (0.5, 1.8, 80, True, True), (1.0, 1.5, 50, False, False), (2.0, 2.0, 120, True, False),
+    (3.0, 1.4, 40, True, True), (4.0, 2.1, 150, True, True), (5.0, 1.8, 80, False, True),
+    (6.5, 1.5, 60, True, False), (8.0, 2.0, 90, False, False), (9.0, 1.8, 80, True, True),
+]
+COARSE_IDS = [f"{v}kmh-{h}m-{m}kg{'-rest' if r else ''}{'-stop' if s else ''}" for v, h, m, r, s in COARSE]
+
+#: the swing2 toe clearance is a constraint at the grid's nodes; between them the toe may dip
+#: below it by a fraction of a millimetre (0.07 mm is the deepest on the coarse grid)
+TOE_DIP_BETWEEN_NODES = 2e-4
+
+_LOCKED = STANCE_CONTEXT.index["locked"]
+
+
+@dataclass
+class RecordedWalk:
+    walk: object
+    #: (step index, subphase name) -> (SubphaseProblem, SubphaseSolution) of the solve the walk kept
+    problems: dict
+    #: (method, grid point) of a :func:`coarse_walk`
+    key: tuple = ()
+
+    def dense(self, step: int, subphase: str) -> "Dense":
+        """The dense re-integration of one subphase (cached for the coarse grid's walks)."""
+        if self.key:
+            return coarse_dense(*self.key, step, subphase)
+        return dense_trajectory(*self.problems[(step, subphase)])
+
+    @property
+    def body(self):
+        return self.walk.spec.body
+
+
+def grid_config(speed, height, mass, rest, stop, steps=2) -> dict:
+    return {"name": "checks", "body": {"height": height, "mass": mass},
+            "walk": {"speed": speed, "steps": steps, "start_from_rest": rest, "end_at_rest": stop}}
+
+
+def record_walk(mapping: dict, method: str) -> RecordedWalk:
+    """Simulate a walk and keep every subphase problem with the solution the walk used (the last
+    solve of each subphase of each step: the periodic start's trial stances come before it)."""
+    problems = {}
+    original = StepController._solve
+
+    def spy(self, step, problem, remember=True):
+        solution = original(self, step, problem, remember)
+        problems[(step, problem.spec.name)] = (problem, solution)
+        return solution
+    StepController._solve = spy
+    try:
+        walk = simulate_walk(walk_spec(ExperimentConfig.from_mapping(mapping), method))
+    finally:
+        StepController._solve = original
+    return RecordedWalk(walk, problems)
+
+
+@lru_cache(maxsize=None)
+def coarse_walk(method: str, point: tuple) -> RecordedWalk:
+    """One walk of the coarse grid, simulated once per test session."""
+    recorded = record_walk(grid_config(*point), method)
+    recorded.key = (method, point)
+    return recorded
+
+
+@dataclass
+class Dense:
+    t: np.ndarray            # samples between the stored ones (the stored ones included)
+    x: np.ndarray            # (len(t), nx) states there
+    gaps: list               # (stored sample k, max |x_k+1 - integrated x_k+1|) for each interval
+
+
+def _locked_after(events, t) -> bool:
+    """Whether the stance leg is locked at ``t`` (plain shooting's lock events, section 4.2)."""
+    locked = False
+    for name, t_event in sorted(events, key=lambda e: e[1]):
+        if t_event <= t + 1e-12:
+            locked = name == "leg_too_long"
+    return locked
+
+
+def dense_trajectory(problem, solution, per_interval: int = 8, rtol: float = 1e-10) -> Dense:
+    """Re-integrate every interval between stored samples from its stored start, on ``per_interval``
+    sub-samples, with the subphase's right-hand side and solved parameters. All intervals are one
+    ODE system in the normalised time s of each interval (t = t_k + s·h_k), so one mapped call of
+    the right-hand side serves them all. A lock event of plain shooting switches the stance model
+    to its rigid leg, as the event does in the solver; the interval that ends on an event is not
+    compared (its stored end is after the lock map)."""
+    spec = problem.spec
+    u = np.array([solution.parameters[k] for k in spec.unknown_names])
+    t = np.asarray(solution.t, float)
+    n, nx = len(t) - 1, spec.nx
+    starts, h = t[:-1], np.diff(t)
+    contexts = np.repeat(problem.context[:, None], n, axis=1)
+    contexts[_LOCKED, :] = [float(_locked_after(solution.events, t0)) for t0 in starts]
+    rhs_all = mapped(spec.rhs, n)
+
+    def rhs(s, flat):
+        xs = flat.reshape(n, nx).T
+        return (np.asarray(rhs_all(xs, starts + s * h, u, contexts)) * h).T.ravel()
+    samples = np.linspace(0.0, 1.0, per_interval + 1)
+    run = solve_ivp(rhs, (0.0, 1.0), np.asarray(solution.states[:-1], float).ravel(), method="DOP853",
+                    rtol=rtol, atol=rtol * 1e-2, t_eval=samples)
+    ends = run.y[:, -1].reshape(n, nx)
+    event_times = [t_event for _, t_event in solution.events]
+    gaps = [(k, float(np.max(np.abs(ends[k] - solution.states[k + 1])))) for k in range(n)
+            if not any(abs(t[k + 1] - t_event) < 1e-12 for t_event in event_times)]
+    inner = run.y[:, :-1].reshape(n, nx, per_interval)            # (interval, state, sample)
+    dense_t = (starts[:, None] + samples[None, :-1] * h[:, None]).ravel()
+    dense_x = inner.transpose(0, 2, 1).reshape(n * per_interval, nx)
+    return Dense(np.append(dense_t, t[-1]), np.vstack([dense_x, solution.states[-1:]]), gaps)
+
+
+@lru_cache(maxsize=None)
+def coarse_dense(method: str, point: tuple, step: int, subphase: str) -> Dense:
+    """:func:`dense_trajectory` of one subphase of a :func:`coarse_walk`, computed once."""
+    problem, solution = coarse_walk(method, point).problems[(step, subphase)]
+    return dense_trajectory(problem, solution)
+
+
+def world_hips(body, states: np.ndarray, origin_x: float) -> np.ndarray:
+    """World hip positions of stance states (n, >=6): the stance ankle at (origin_x, l9) plus
+    w·(sin θ1, cos θ1) (ERRATA "Conventions"), written out here rather than taken from the package."""
+    w, theta1 = states[:, 0], states[:, 1]
+    return np.column_stack([origin_x + w * np.sin(theta1), body.l9 + w * np.cos(theta1)])
+
+
+def world_hip_velocities(states: np.ndarray) -> np.ndarray:
+    w, theta1, wd, theta1d = states[:, 0], states[:, 1], states[:, 3], states[:, 4]
+    return np.column_stack([wd * np.sin(theta1) + w * theta1d * np.cos(theta1),
+                            wd * np.cos(theta1) - w * theta1d * np.sin(theta1)])
+
+
+def swing_foot_angles(context: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """θ5, θ6 of the swing foot at times ``t``, as the swing's context defines them: held until
+    ``foot_from_time`` (t2), then linear to the heel-strike attributes at the end of the swing."""
+    n = {name: float(context[i]) for name, i in SWING_CONTEXT.index.items()}
+    s = np.maximum(0.0, (t - n["foot_from_time"]) / (n["swing_end_time"] - n["foot_from_time"]))
+    return (n["theta5_from"] + s * (n["theta5_impact"] - n["theta5_from"]),
+            n["theta6_from"] + s * (n["theta6_impact"] - n["theta6_from"]))
+
+
+def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense) -> tuple[np.ndarray, np.ndarray]:
+    """Heights above the ground (m) of the swing foot's toe tip and heel at the dense samples of a
+    swing subphase: the hip from the carried stance state, the leg from θ3 and θ4 (0 in swing3,
+    where the knee is locked) with the thigh l3 and shank l4, the foot from
+    :func:`klaw_ocp.dynamics.foot_points_float` with the context's foot angles."""
+    hips = world_hips(body, dense.x, origin_x)
+    theta3 = dense.x[:, 6]
+    theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
+    knee = hips - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+    ankle = knee - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)])
+    theta5, theta6 = swing_foot_angles(context, dense.t)
+    toe, heel = np.empty(len(dense.t)), np.empty(len(dense.t))
+    for i in range(len(dense.t)):
+        foot_heel, _, foot_toe = foot_points_float(ankle[i, 0], ankle[i, 1], theta3[i] + theta4[i], theta5[i],
+                                                   theta6[i], body.l8, body.l9, body.l12, body.l13)
+        toe[i], heel[i] = foot_toe[1], foot_heel[1]
+    return toe, heel
+
+
+def eq2_timings(step_frequency_spm: float, swing1_fraction=0.5, swing2_fraction=0.85) -> dict:
+    """Eq. 2 and section 4.3's split, computed here from the step frequency alone (s)."""
+    t_cycle = 120.0 / step_frequency_spm
+    t_step = t_cycle / 2
+    t_ds = (-0.16 * step_frequency_spm + 29.08) * t_cycle / 100
+    t_swing = t_step - t_ds
+    return {"t_step": t_step, "t_ds": t_ds, "t1": t_ds + swing1_fraction * t_swing,
+            "t2": t_ds + swing2_fraction * t_swing}
+
+
+def eq3_landing(body, step_length: float, theta5_impact_deg: float) -> dict:
+    """Eq. 3's heel-strike posture, computed here from the body and the step alone: the landing
+    heel (relative to the stance ankle's x) and the hip (relative to the stance ankle)."""
+    l1, l8, l9, l11 = body.l1, body.l8, body.l9, body.l11
+    omega8 = math.acos(l8 / l11)
+    r = math.sqrt(l1 ** 2 + l11 ** 2 - 2 * l1 * l11 * math.cos(math.radians(theta5_impact_deg) + omega8))
+    heel_x = step_length - l8
+    hip_x = step_length / 2
+    hip_y = math.sqrt(r ** 2 - (heel_x - hip_x) ** 2)
+    return {"heel_x": heel_x, "hip": np.array([hip_x, hip_y - l9])}

@@ -1,0 +1,252 @@
+"""Walk-level checks, from the walk itself, over the envelope's coarse grid in both solver modes.
+
+None of these trusts what a solver says about its own solution (``residual``, ``path_min`` at the
+nodes, ``heel_clearance_min``): the heel-strike posture is rebuilt from the states with forward
+kinematics and compared with eq. 3 computed here; the timings are eq. 2 computed here; the
+trajectories between the stored samples are re-integrated with SciPy's DOP853 on the subphase's own
+model (tests/_walk_checks.py), and the clearances and the hip height are measured on that dense
+grid (8 samples per interval).
+"""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from _walk_checks import (COARSE, COARSE_IDS, METHODS, TOE_DIP_BETWEEN_NODES, coarse_walk, dense_trajectory,
+                          eq2_timings, eq3_landing, record_walk, swing_foot_heights, world_hip_velocities,
+                          world_hips)
+from klaw_ocp.dynamics import CONSERVED, heel_strike_conserved, heel_strike_map, swing_leg_points
+
+SUBPHASES = ("stance", "swing1", "swing2", "swing3")
+#: the monitored stance lets the hip dip below its heel-strike height just after impact
+#: (docs/solvers.md: at most 5 mm over the envelope; 4.4 mm is the deepest on this grid)
+MONITORED_HIP_DIP_MAX = 0.005
+#: RK4 (4 substeps, 20 intervals) against DOP853 at rtol 1e-10, on one interval without a torque
+#: switch at its end (m, rad, m/s, rad/s alike): below 1e-4 from 5 km/h up, 5.5e-3 in the first
+#: stance interval at 0.5 km/h (88 ms long); a wrong model in a solver gives errors of order one
+RK4_INTERVAL_ERROR = 1e-2
+
+
+@pytest.fixture(params=[(m, p) for m in METHODS for p in COARSE],
+                ids=[f"{m}-{i}" for m in METHODS for i in COARSE_IDS])
+def grid_walk(request):
+    method, point = request.param
+    recorded = coarse_walk(method, point)
+    assert recorded.walk.status == "ok", recorded.walk.message
+    return recorded
+
+
+def _steps(recorded):
+    return recorded.walk.steps
+
+
+def test_every_heel_strike_is_the_eq3_posture(grid_walk):
+    """At t_step the stance hip is where eq. 3 puts it, the swing leg is straight, and its heel
+    touches the ground on the planned point, one step ahead of the stance ankle less l8."""
+    body, attrs = grid_walk.body, grid_walk.walk.spec.attributes
+    for step in _steps(grid_walk):
+        sl = step.plan.constraints.step_length
+        expected = eq3_landing(body, sl, attrs.theta5_impact)
+        stance_end = step.subphase("stance").states[-1]
+        hip = world_hips(body, stance_end[None, :], step.origin_x)[0]
+        assert hip - [step.origin_x, body.l9] == pytest.approx(expected["hip"], abs=1e-7), step.index
+        assert step.subphase("swing2").states[-1][7] == pytest.approx(0.0, abs=1e-7)   # knee straight at t2
+        swing_end = step.subphase("swing3").states[-1]
+        foot = swing_leg_points(body, (swing_end[6], 0.0), hip, math.radians(attrs.theta5_impact),
+                                math.radians(attrs.theta6_impact))
+        # Table B-1's l11 (eq. 3) and the foot's sqrt(l8² + l9²) agree to its 4 digits
+        assert foot["heel"] == pytest.approx([step.origin_x + expected["heel_x"], 0.0], abs=5e-5), step.index
+
+
+def test_every_subphase_lasts_what_eq2_says(grid_walk):
+    """Stance 0..t_step, double support until t_ds, swing1/2/3 ending at 50/85/100 % of the swing,
+    and steps that follow each other without gap or overlap."""
+    t_walk = 0.0
+    for step in _steps(grid_walk):
+        eq2 = eq2_timings(step.plan.parameters.step_frequency_spm)
+        assert step.t_start == pytest.approx(t_walk, abs=1e-12)
+        spans = {s.name: (s.t[0], s.t[-1]) for s in step.subphases}
+        assert spans["stance"] == pytest.approx((0.0, eq2["t_step"]), abs=1e-12)
+        assert step.double_support["t"][-1] == pytest.approx(eq2["t_ds"], abs=1e-12)
+        assert spans["swing1"] == pytest.approx((eq2["t_ds"], eq2["t1"]), abs=1e-12)
+        assert spans["swing2"] == pytest.approx((eq2["t1"], eq2["t2"]), abs=1e-12)
+        assert spans["swing3"] == pytest.approx((eq2["t2"], eq2["t_step"]), abs=1e-12)
+        t_walk += eq2["t_step"]
+    assert grid_walk.walk.duration == pytest.approx(t_walk, abs=1e-12)
+
+
+def test_each_stance_starts_where_the_heel_strike_map_puts_it(grid_walk):
+    """The stance origin advances by the step length, the hind leg's ankle is the previous stance
+    ankle, and across heel strike the hip's position and velocity, θ2 and θ̇2 are continuous, so
+    the quantities the map conserves (dynamics.CONSERVED) are the same before and after."""
+    body, steps = grid_walk.body, _steps(grid_walk)
+    for before, after in zip(steps, steps[1:]):
+        sl = before.plan.constraints.step_length
+        assert after.origin_x - before.origin_x == pytest.approx(sl, abs=1e-12)
+        assert after.hind_ankle_x == pytest.approx(before.origin_x, abs=1e-12)
+        pre, post = before.subphase("stance").states[-1], after.subphase("stance").states[0]
+        assert post == pytest.approx(heel_strike_map(body, pre, (sl, 0.0)), abs=1e-12)
+        assert world_hips(body, post[None], after.origin_x) == pytest.approx(
+            world_hips(body, pre[None], before.origin_x), abs=1e-12)
+        assert world_hip_velocities(post[None]) == pytest.approx(world_hip_velocities(pre[None]), abs=1e-10)
+        assert (post[2], post[5]) == pytest.approx((pre[2], pre[5]), abs=1e-14)
+        old, new = np.array([before.origin_x, body.l9]), np.array([after.origin_x, body.l9])
+        kept = heel_strike_conserved(body, pre, old, about=new)
+        now = heel_strike_conserved(body, post, new)
+        for key in CONSERVED:
+            assert np.asarray(now[key]) == pytest.approx(np.asarray(kept[key]), rel=1e-9, abs=1e-10), key
+
+
+def test_the_hip_advances_one_step_length_per_step(grid_walk):
+    """A step that starts from the mirror of an equal step's heel strike (every step after the
+    first at a constant speed, and the first of a walk that starts walking) moves the hip by sl,
+    so the mean speed is sl·sf."""
+    body, walk = grid_walk.body, grid_walk.walk
+    steady = []
+    for step in _steps(grid_walk):
+        previous = walk.steps[step.index - 1].plan if step.index else None
+        mirrored = (step.index == 0 and not walk.spec.start_from_rest) or (
+            previous is not None and previous.constraints.step_length == step.plan.constraints.step_length)
+        if not mirrored or step.plan.constraints.step_length == 0:
+            continue
+        states = step.subphase("stance").states
+        hips = world_hips(body, states[[0, -1]], step.origin_x)
+        p = step.plan.parameters
+        assert (hips[1, 0] - hips[0, 0]) / step.plan.timings.t_step == pytest.approx(
+            p.step_length_m * p.step_frequency_spm / 60, rel=1e-7), step.index
+        assert p.step_length_m * p.step_frequency_spm * 60 / 1000 == pytest.approx(p.speed_kmh, rel=1e-12)
+        steady.append(step.index)
+    if not walk.spec.start_from_rest:
+        assert 0 in steady and 1 in steady
+
+
+def test_the_hip_stays_above_its_heel_strike_floor(grid_walk):
+    """§4: the hip "must never be allowed to drop below its minimal value at heel strike"; the
+    paper's monitored stance approximates it by feedback, within MONITORED_HIP_DIP_MAX, checked on
+    the dense grid of the stance."""
+    body = grid_walk.body
+    deepest = 0.0
+    for step in _steps(grid_walk):
+        y = world_hips(body, grid_walk.dense(step.index, "stance").x, step.origin_x)[:, 1]
+        floor = min(y[0], y[-1])
+        deepest = max(deepest, floor - y.min())
+    assert deepest <= MONITORED_HIP_DIP_MAX
+
+
+def test_the_tracking_stance_keeps_the_hip_on_its_floor_between_the_nodes():
+    """The tracking stance holds the floor as a hard constraint at its nodes; between them the hip
+    may not dip by more than a tenth of a millimetre."""
+    recorded = record_walk({"name": "tracking", "body": {"height": 1.8, "mass": 80},
+                            "walk": {"speed": 5.0, "steps": 3}, "solver": {"stance": "tracking"}},
+                           "multiple-shooting")
+    body = recorded.body
+    for step in recorded.walk.steps:
+        problem, solution = recorded.problems[(step.index, "stance")]
+        y = world_hips(body, dense_trajectory(problem, solution).x, step.origin_x)[:, 1]
+        floor = min(step.hip_reference["y_start"], step.hip_reference["y_end"]) + body.l9
+        assert y.min() >= floor - 1e-4, step.index
+
+
+def test_the_swing2_toe_keeps_its_clearance_between_the_nodes(grid_walk):
+    """§4.3: the toe stays above ``toe_clearance`` through swing2, measured on the dense grid with
+    the foot the swing defines (not the solver's path function)."""
+    body, clearance = grid_walk.body, grid_walk.walk.spec.attributes.toe_clearance
+    for step in _steps(grid_walk):
+        problem, _ = grid_walk.problems[(step.index, "swing2")]
+        toe, _ = swing_foot_heights(body, step.origin_x, "swing2", problem.context,
+                                    grid_walk.dense(step.index, "swing2"))
+        assert toe.min() >= clearance - TOE_DIP_BETWEEN_NODES, step.index
+
+
+@pytest.mark.xfail(strict=True, reason="issue #22 (swing foot, §4.3): today's swing foot keeps its t1 "
+                   "angles from toe-off to t2, so its toe dips below the ground just after toe-off at "
+                   "6.5-9 km/h and its heel below the ground in swing2 and swing3 at most speeds")
+def test_the_swing_foot_stays_above_the_ground_through_the_whole_swing():
+    """Toe tip and heel of the swing foot above the ground (1 µm) on the dense grid of swing1,
+    swing2 and swing3, every step of every walk of the coarse grid in both modes."""
+    below = []
+    for method in METHODS:
+        for point in COARSE:
+            recorded = coarse_walk(method, point)
+            for step in recorded.walk.steps:
+                for name in SUBPHASES[1:]:
+                    problem, _ = recorded.problems[(step.index, name)]
+                    toe, heel = swing_foot_heights(recorded.body, step.origin_x, name, problem.context,
+                                                   recorded.dense(step.index, name))
+                    lowest = min(toe.min(), heel.min())
+                    if lowest < -1e-6:
+                        below.append(f"{method} {point} step {step.index} {name}: {1000 * lowest:.1f} mm")
+    assert not below, "\n".join(below)
+
+
+def test_the_stored_trajectories_are_the_model_between_the_nodes(grid_walk):
+    """Re-integrated from each stored sample, every smooth interval ends on the next stored sample
+    to within the RK4 discretisation error."""
+    for step in _steps(grid_walk):
+        for name in SUBPHASES:
+            problem, solution = grid_walk.problems[(step.index, name)]
+            t_off = step.plan.timings.t_theta1_off
+            gaps = [(k, g) for k, g in grid_walk.dense(step.index, name).gaps
+                    if abs(solution.t[k + 1] - t_off) > 1e-12]
+            assert gaps and max(g for _, g in gaps) <= RK4_INTERVAL_ERROR, (step.index, name)
+
+
+def _continuous_final_state(problem, solution):
+    """The subphase re-integrated whole from its initial state with DOP853 and the solved
+    parameters: the continuous model's answer to the same torques."""
+    spec = problem.spec
+    u = np.array([solution.parameters[k] for k in spec.unknown_names])
+    run = solve_ivp(lambda t, x: np.asarray(spec.rhs(x, t, u, problem.context)).ravel(),
+                    (solution.t[0], solution.t[-1]), solution.states[0], method="DOP853", rtol=1e-9, atol=1e-11)
+    return run.y[:, -1]
+
+
+@pytest.mark.xfail(strict=True, reason="the walk is the RK4 model's walk, not yet the continuous one's: "
+                   "(1) the RK4's last stage of the interval that ends at 0.4 t_step evaluates F_theta1's "
+                   "step at the node, where it is already off (up to 1.4e-2 rad/s of theta2d at that node; "
+                   "the swing's stance then ends up to 9e-3 from the stance); (2) 20 intervals of 4 RK4 "
+                   "substeps are 22 ms steps at 0.5 km/h. The solved torques miss eq. 3 in the continuous "
+                   "model by up to 2.4e-3 rad (theta1) and 0.9 mm (w)")
+def test_the_solved_torques_give_the_same_walk_in_the_continuous_model():
+    """Every stance re-integrated whole (no lock events) meets eq. 3's w and θ1 within 1e-5, and
+    every swing's re-simulated stance ends on the stance's own final state within 1e-5."""
+    misses = []
+    for method in METHODS:
+        for point in COARSE:
+            recorded = coarse_walk(method, point)
+            for step in recorded.walk.steps:
+                problem, solution = recorded.problems[(step.index, "stance")]
+                con = step.plan.constraints
+                if not solution.events:
+                    end = _continuous_final_state(problem, solution)
+                    misses.append(max(abs(end[0] - con.w), abs(end[1] - con.theta1)))
+                stance_end = step.subphase("stance").states[-1]
+                misses.append(float(np.max(np.abs(step.subphase("swing3").states[-1][:6] - stance_end))))
+    assert max(misses) <= 1e-5
+
+
+def test_the_swing_hangs_from_this_steps_stance(grid_walk):
+    """Assumption 4: the swing leg hangs from the hip of the stance of the same step. Swing1 starts
+    from the stance state at toe-off, and each swing subphase starts where the previous ended."""
+    for step in _steps(grid_walk):
+        stance = step.subphase("stance")
+        k_toe_off = int(np.argmin(np.abs(stance.t - step.double_support["t"][-1])))
+        s1, s2, s3 = (step.subphase(n) for n in SUBPHASES[1:])
+        assert s1.states[0][:6] == pytest.approx(stance.states[k_toe_off], abs=1e-14)
+        assert s2.states[0][:9] == pytest.approx(s1.states[-1], abs=1e-14)
+        assert s3.states[0][:7] == pytest.approx(s2.states[-1][:7], abs=1e-14)
+
+
+WALKING_STARTS = [(m, p) for m in METHODS for p in COARSE if not p[3]]
+
+
+@pytest.mark.xfail(strict=True, reason="the periodic start matches only the horizontal hip speed "
+                   "(walk.periodic_start), so step 0 starts from another state than the steady steps; "
+                   "a later issue makes it the periodic orbit")
+@pytest.mark.parametrize("method, point", WALKING_STARTS,
+                         ids=[f"{m}-{COARSE_IDS[COARSE.index(p)]}" for m, p in WALKING_STARTS])
+def test_a_walk_that_starts_walking_starts_on_its_periodic_orbit(method, point):
+    steps = coarse_walk(method, point).walk.steps
+    first, second = (s.subphase("stance").states[0] for s in steps[:2])
+    assert first == pytest.approx(second, abs=1e-6)
