@@ -3,7 +3,7 @@
 - A converged walk does not depend on round-off: a 10x tighter tolerance, or initial guesses
   perturbed by 5 %, change no state of the walk by more than 1e-6.
 - A coarse grid over the supported envelope (docs/envelope.md), starts from rest and stops at rest
-  included, converges in both modes; the dense grid is the slow test.
+  included, converges in both modes; so does a dense grid (60 walks per mode, about 20 s).
 - Fallbacks are reported where they are needed, per subphase.
 """
 import math
@@ -126,7 +126,6 @@ DENSE = [(v, h, rest) for v in (0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.0
          for h in (1.4, 1.75, 2.1) for rest in (False, True)]
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("speed, height, rest", DENSE)
 def test_the_dense_envelope_grid_converges(method, speed, height, rest):
@@ -135,7 +134,6 @@ def test_the_dense_envelope_grid_converges(method, speed, height, rest):
     assert walk.status == "ok", walk.message
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_a_schedule_across_the_whole_speed_range_converges(method):
     schedule = [{"step": 0, "speed": 1.0}, {"step": 8, "speed": 9.0}, {"step": 16, "speed": 1.0}]

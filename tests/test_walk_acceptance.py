@@ -1,16 +1,14 @@
-"""Issue #4 acceptance on full walks (slow: run with ``pytest -m slow``).
+"""Issue #4 acceptance on full walks: the paper's walks at full length and the whole range of
+speeds and body heights, in both modes (tests/test_walk.py has the same mechanisms on short walks)."""
+from pathlib import Path
 
-The default run covers the same mechanisms on short walks (tests/test_walk.py: both modes, the
-torque agreement, start and stop, a schedule); these run the paper's walks at full length and
-the whole range of speeds and body heights.
-"""
 import numpy as np
 import pytest
 
 from klaw_ocp.results import walk_table
 from klaw_ocp.walk import simulate_walk
 
-pytestmark = pytest.mark.slow
+ROOT = Path(__file__).resolve().parents[1]
 METHODS = ["multiple-shooting", "plain-shooting"]
 
 
@@ -44,16 +42,15 @@ def test_fig10_short_and_long_steps(method, step_length):
     assert walk.status == "ok" and max_residual(walk) <= 1e-6
 
 
-@pytest.mark.parametrize("config", ["configs/start_stop_2kmh.yaml", "configs/start_stop_5kmh.yaml",
-                                    "configs/accelerate.yaml"])
+@pytest.mark.parametrize("config", ["start_stop_2kmh.yaml", "start_stop_5kmh.yaml", "accelerate.yaml"])
 @pytest.mark.parametrize("method", METHODS)
 def test_fig8_and_schedules(method, config):
-    walk = simulate_walk(config, method=method)
+    walk = simulate_walk(ROOT / "configs" / config, method=method)
     assert walk.status == "ok" and max_residual(walk) <= 1e-6
 
 
 def test_twelve_second_natural_walk_in_both_modes():
-    walks = [simulate_walk("configs/natural_walk.yaml", method=m) for m in METHODS]
+    walks = [simulate_walk(ROOT / "configs" / "natural_walk.yaml", method=m) for m in METHODS]
     tables = [walk_table(w) for w in walks]
     for walk, table in zip(walks, tables):
         assert walk.status == "ok" and max_residual(walk) <= 1e-6
@@ -75,7 +72,7 @@ def hip_floor_breach(walk):
 
 
 def test_twelve_second_walk_with_the_tracking_stance():
-    monitored = simulate_walk("configs/natural_walk.yaml")
+    monitored = simulate_walk(ROOT / "configs" / "natural_walk.yaml")
     walk = simulate_walk({**_natural_walk_mapping(), "solver": {"stance": "tracking"}})
     table = walk_table(walk)
     assert walk.status == "ok" and max_residual(walk) <= 1e-6 and walk.duration >= 12.0
@@ -101,5 +98,5 @@ def test_lock_rule_holds_on_a_walk_that_triggers_it(method):
 
 def _natural_walk_mapping():
     import yaml
-    with open("configs/natural_walk.yaml") as f:
+    with open(ROOT / "configs" / "natural_walk.yaml") as f:
         return yaml.safe_load(f)
