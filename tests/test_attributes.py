@@ -118,3 +118,19 @@ def test_docs_list_every_registered_attribute_with_its_default():
 def test_docs_are_exactly_the_generated_table():
     from klaw_ocp.gait.attributes import markdown_table
     assert DOCS.read_text(encoding="utf-8") == markdown_table()
+
+
+def test_not_used_yet_is_exactly_the_attributes_nothing_reads():
+    """docs/attributes.md's "not used yet" must stay true both ways: a listed attribute appears
+    nowhere in the package's code outside the registry, and every other one is read somewhere
+    (as ``attrs.name``, ``get("name")`` or the like); so a walk changes with every unmarked one."""
+    from klaw_ocp.gait.attributes import NOT_USED_YET
+    src = Path(__file__).resolve().parents[1] / "src" / "klaw_ocp"
+    code = "\n".join(p.read_text(encoding="utf-8") for p in src.rglob("*.py") if p.name != "attributes.py")
+    # strings and comments only mention a name (examples, help texts): strip docstrings and comments
+    code = re.sub(r'"""(.|\n)*?"""', "", code)
+    code = re.sub(r"#.*", "", code)
+    read = {name for name in ATTRIBUTES if re.search(rf"\b{name}\b", code)}
+    assert NOT_USED_YET <= set(ATTRIBUTES)
+    assert read & NOT_USED_YET == set(), "read by the code, so no longer 'not used yet'"
+    assert set(ATTRIBUTES) - NOT_USED_YET - read == set(), "nothing reads these: mark them not used yet"

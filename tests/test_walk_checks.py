@@ -23,9 +23,11 @@ SUBPHASES = ("stance", "swing1", "swing2", "swing3")
 #: (docs/solvers.md: at most 5 mm over the envelope; 4.4 mm is the deepest on this grid)
 MONITORED_HIP_DIP_MAX = 0.005
 #: RK4 (4 substeps, 20 intervals) against DOP853 at rtol 1e-10, on one interval without a torque
-#: switch at its end (m, rad, m/s, rad/s alike): below 1e-4 from 5 km/h up, 5.5e-3 in the first
-#: stance interval at 0.5 km/h (88 ms long); a wrong model in a solver gives errors of order one
-RK4_INTERVAL_ERROR = 1e-2
+#: switch at its end (m, rad, m/s, rad/s alike): below 1e-4 from 5 km/h up; below that speed the
+#: intervals are long (88 ms at 0.5 km/h) and the first stance interval, where the leg spring takes
+#: the impact, is off by up to 5.5e-3 at 0.5 km/h and 2.4e-4 at 3-4 km/h (part of the xfail below)
+RK4_INTERVAL_ERROR = 2e-4
+RK4_INTERVAL_ERROR_BELOW_5_KMH = 1e-2
 
 
 @pytest.fixture(params=[(m, p) for m in METHODS for p in COARSE],
@@ -189,7 +191,8 @@ def test_the_stored_trajectories_are_the_model_between_the_nodes(grid_walk):
             t_off = step.plan.timings.t_theta1_off
             gaps = [(k, g) for k, g in grid_walk.dense(step.index, name).gaps
                     if abs(solution.t[k + 1] - t_off) > 1e-12]
-            assert gaps and max(g for _, g in gaps) <= RK4_INTERVAL_ERROR, (step.index, name)
+            allowed = RK4_INTERVAL_ERROR if step.plan.parameters.speed_kmh >= 5 else RK4_INTERVAL_ERROR_BELOW_5_KMH
+            assert gaps and max(g for _, g in gaps) <= allowed, (step.index, name)
 
 
 def _continuous_final_state(problem, solution):

@@ -7,7 +7,7 @@ section 5), overrides of the locomotion attributes, and solver and output option
     name: natural_walk            # a slug: also the default output folder results/<name>
     body: {height: 1.8, mass: 80} # m, kg
     walk: {speed: 5.0, duration: 12}
-    attributes: {pelvic_list: 5.0}
+    attributes: {trunk_lean: 8.0}
     solver: {method: multiple-shooting}
     output: {animation: false}
 

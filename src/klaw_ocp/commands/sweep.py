@@ -20,7 +20,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                      "walk converged, 1 otherwise, 2 for bad input. See docs/sweep.md.")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
     p.add_argument("--vary", action="append", required=True, metavar="PATH=VALUES",
-                   help="a dotted config path (walk.speed, body.height, attributes.pelvic_list, "
+                   help="a dotted config path (walk.speed, body.height, attributes.trunk_lean, "
                         "solver.intervals, ...) and its values: a comma list of YAML scalars "
                         "(1,3,5 or true,false) or a range start:stop:step that includes stop when "
                         "it is on the grid (0.5:8:0.5); repeat for a grid")
