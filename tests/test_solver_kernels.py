@@ -1,10 +1,15 @@
 """The compiled solver kernels (issue #9): the same numbers as CasADi's own evaluation and AD, a
 disk cache that is safe to share between processes, and a walk that runs without a compiler."""
+import hashlib
+import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
+import threading
 import warnings
+from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,8 +23,20 @@ from klaw_ocp.solvers.integrator import SubphaseKernels, rk4_interval, subphase_
 from klaw_ocp.walk import simulate_walk, walk_spec
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def _machine_has_a_compiler() -> bool:
+    """Whether compiled kernels are expected here: KLAW_OCP_JIT not off and a C compiler on PATH.
+    Looked up independently of :func:`kernels.compiler`, so that a bug making klaw_ocp miss a
+    compiler that is there fails the tests below instead of skipping them."""
+    if os.environ.get("KLAW_OCP_JIT", "1").strip().lower() in ("0", "off", "false", "no"):
+        return False
+    names = [os.environ["CC"]] if os.environ.get("CC") else ["cc", "gcc", "clang"]
+    return any(shutil.which(name) for name in names)
+
+
 #: the compile path needs a C compiler; without one, the CasADi fallback is what runs (tested below)
-requires_compiler = pytest.mark.skipif(kernels.compiler() is None, reason="no C compiler on this machine")
+requires_compiler = pytest.mark.skipif(not _machine_has_a_compiler(), reason="no C compiler on this machine")
 
 
 @pytest.fixture(scope="module")
@@ -140,27 +157,91 @@ def test_a_damaged_library_is_rebuilt(tmp_path, monkeypatch):
     assert library.compiled and library.path == path and calls == [True]
 
 
+#: a child process that builds (or finds) the "race" library and reports what it did as JSON
+_RACE_SCRIPT = textwrap.dedent("""
+    import hashlib, json, os, subprocess, sys, time
+    from pathlib import Path
+    import casadi as ca
+    from klaw_ocp.solvers.kernels import KernelLibrary
+    sync, racers = Path(sys.argv[1]), int(sys.argv[2])
+    report = {"built": False}
+    run = subprocess.run
+
+    def compiler_run(cmd, *args, **kwargs):
+        if "-o" not in cmd:                 # the compiler's --version, not a build
+            return run(cmd, *args, **kwargs)
+        # a barrier across the processes: no build finishes (so none can be found in the cache)
+        # before every racer has started its own; the builds overlap
+        (sync / f"compiling-{os.getpid()}").touch()
+        deadline = time.monotonic() + 60
+        while len(list(sync.glob("compiling-*"))) < racers and time.monotonic() < deadline:
+            time.sleep(0.005)
+        report["together"] = len(list(sync.glob("compiling-*"))) >= racers
+        result = run(cmd, *args, **kwargs)
+        out = Path(cmd[cmd.index("-o") + 1])
+        stat = out.stat()
+        report.update(built=True, output=str(out.resolve()), inode=[stat.st_dev, stat.st_ino],
+                      size=stat.st_size, sha=hashlib.sha256(out.read_bytes()).hexdigest())
+        return result
+
+    subprocess.run = compiler_run
+
+    def build(compiling):
+        x = ca.SX.sym("x", 4)
+        return [ca.Function("race", [x], [ca.sin(x) * ca.cos(x) + x ** 3])]
+
+    lib = KernelLibrary(["race"], ["race"], build)
+    values = lib.functions()["race"]([0.1, 0.2, 0.3, 0.4])[0]
+    report.update(compiled=lib.compiled, path=str(lib.path.resolve()) if lib.path else None,
+                  values=values.tolist())
+    print(json.dumps(report))
+""")
+
+
 @requires_compiler
-def test_processes_may_build_the_same_library_at_once(tmp_path):
-    script = textwrap.dedent("""
-        import casadi as ca, sys
-        from klaw_ocp.solvers.kernels import KernelLibrary
-        def build(compiling):
-            x = ca.SX.sym("x", 4)
-            return [ca.Function("race", [x], [ca.sin(x) * ca.cos(x) + x ** 3])]
-        lib = KernelLibrary(["race"], ["race"], build)
-        out = lib.functions()["race"]([0.1, 0.2, 0.3, 0.4])[0]
-        assert lib.compiled
-        print(repr(out.tolist()))
-    """)
-    env = dict(os.environ, KLAW_OCP_CACHE_DIR=str(tmp_path))
-    procs = [subprocess.Popen([sys.executable, "-c", script], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True) for _ in range(4)]
+def test_processes_may_build_the_same_library_at_once(tmp_path, monkeypatch):
+    """Sweep workers may build the same library at once: here four processes all build it, at the
+    same time (a barrier in front of their compilers), each into a file of its own; the cache
+    then holds one of those files, whole, renamed into place (never written to in place, never
+    a mix of two builds), which every racer loaded and a fresh loader finds without building."""
+    racers, cache, sync = 4, tmp_path / "cache", tmp_path / "sync"
+    sync.mkdir()
+    env = dict(os.environ, KLAW_OCP_CACHE_DIR=str(cache))
+    procs = [subprocess.Popen([sys.executable, "-c", _RACE_SCRIPT, str(sync), str(racers)], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(racers)]
     outputs = [p.communicate(timeout=300) for p in procs]
     assert all(p.returncode == 0 for p in procs), [err for _, err in outputs]
-    assert len({out for out, _ in outputs}) == 1
-    assert len(list(tmp_path.rglob("*.so"))) == 1
-    assert not list(tmp_path.rglob(".build-*"))
+    reports = [json.loads(out.strip().splitlines()[-1]) for out, _ in outputs]
+    assert all(r["built"] for r in reports), "every racer built the library (none found it in the cache)"
+    assert all(r["together"] for r in reports), "the four builds ran at the same time"
+    x = np.array([0.1, 0.2, 0.3, 0.4])
+    expected = np.sin(x) * np.cos(x) + x ** 3
+    libraries = list(cache.rglob("*.so"))
+    assert len(libraries) == 1 and not list(cache.rglob(".build-*"))
+    final = libraries[0].resolve()
+    for r in reports:
+        assert r["compiled"] and r["path"] == str(final), r
+        # libm's and numpy's sin/cos may differ by an ulp or two: 1e-13 is round-off, not a defect
+        np.testing.assert_allclose(r["values"], expected, rtol=1e-13, atol=0)
+    outputs = {r["output"] for r in reports}
+    assert len(outputs) == racers and str(final) not in outputs, "each build writes a file of its own"
+    stat = final.stat()
+    winners = [r for r in reports if r["inode"] == [stat.st_dev, stat.st_ino]]
+    assert len(winners) == 1, "the cached library is one build's file moved into place, not a copy"
+    assert (winners[0]["size"], winners[0]["sha"]) == (stat.st_size, hashlib.sha256(final.read_bytes()).hexdigest())
+    assert (stat.st_mode & 0o777) == 0o755
+    # a fresh loader (this process) finds the library, builds nothing, gets the same numbers
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(cache))
+    calls = []
+
+    def build(compiling):
+        calls.append(compiling)
+        y = ca.SX.sym("x", 4)
+        return [ca.Function("race", [y], [ca.sin(y) * ca.cos(y) + y ** 3])]
+    library = kernels.KernelLibrary(["race"], ["race"], build)
+    values = library.functions()["race"](x)[0]
+    assert library.compiled and library.path.resolve() == final and calls == []
+    np.testing.assert_allclose(values, expected, rtol=1e-13, atol=0)
 
 
 def test_a_failing_compiler_falls_back_to_casadi_with_a_warning(tmp_path, monkeypatch):
@@ -176,27 +257,73 @@ def test_a_failing_compiler_falls_back_to_casadi_with_a_warning(tmp_path, monkey
     np.testing.assert_array_equal(fns["tiny_square"]([1.0, -2.0, 0.5])[0], [1.0, 4.0, 0.25])
 
 
+@requires_compiler
 def test_a_walk_without_a_compiler_is_the_same_walk(monkeypatch):
-    """KLAW_OCP_JIT=0 (or no compiler): every kernel and IPOPT's functions evaluated by CasADi."""
+    """KLAW_OCP_JIT=0 (or no compiler): every kernel and IPOPT's functions evaluated by CasADi,
+    and the walk is the walk of the compiled kernels (so the compiled run must really use them)."""
     spec = walk_spec(load_config(ROOT / "configs" / "natural_walk.yaml"))
     spec = replace(spec, plans=spec.plans[:3])
-    results = {}
+    variants = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))
+    loaded, calls = [], Counter()
+    load = kernels.KernelLibrary.load
+
+    def spy_load(self):
+        lib = load(self)
+        loaded.append(self)
+        return lib
+    monkeypatch.setattr(kernels.KernelLibrary, "load", spy_load)
+    for cls in (kernels._CFunction, kernels._CasadiFunction):   # who evaluates the kernels' calls
+        def counted(self, *args, _call=cls.__call__, _name=cls.__name__):
+            calls[_name] += 1
+            return _call(self, *args)
+        monkeypatch.setattr(cls, "__call__", counted)
+    results, used = {}, {}
     for jit in ("1", "0"):
         monkeypatch.setenv("KLAW_OCP_JIT", jit)
         integrator.subphase_kernels.cache_clear()
         ipopt_nlp.ipopt_solver.cache_clear()
+        loaded.clear()
+        calls.clear()
         with warnings.catch_warnings():
-            warnings.simplefilter("error")   # no compile attempt, no warning
-            results[jit] = [simulate_walk(replace(spec, method=m, stance=s))
-                            for m, s in (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"),
-                                         ("multiple-shooting", "tracking"))]
+            warnings.simplefilter("error")   # no failed compile attempt, no warning
+            results[jit] = [simulate_walk(replace(spec, method=m, stance=s)) for m, s in variants]
+        used[jit] = ({lib.names[0]: (lib.compiled, lib.path) for lib in loaded}, dict(calls))
     integrator.subphase_kernels.cache_clear()
     ipopt_nlp.ipopt_solver.cache_clear()
-    for compiled, plain in zip(results["1"], results["0"]):
-        for a, b in zip(compiled.steps, plain.steps):
+    # both runs went through the same libraries: the four subphases' kernels and the tracking
+    # stance's IPOPT functions ...
+    libraries, c_calls = used["1"]
+    assert {"stance_sim", "swing1_sim", "swing2_sim", "swing3_sim", "stance_20_nlp"} <= set(libraries)
+    assert set(used["0"][0]) == set(libraries)
+    # ... compiled and loaded from the cache in the first, every kernel call into the C library ...
+    for name, (compiled, path) in libraries.items():
+        assert compiled and path is not None and path.is_file() and path.parent == kernels.cache_dir(), name
+    assert c_calls.get("_CFunction", 0) > 0 and c_calls.get("_CasadiFunction", 0) == 0, c_calls
+    # ... and evaluated by CasADi in the second, nothing compiled or loaded
+    libraries, casadi_calls = used["0"]
+    assert all(not compiled and path is None for compiled, path in libraries.values()), libraries
+    assert casadi_calls.get("_CasadiFunction", 0) > 0 and casadi_calls.get("_CFunction", 0) == 0, casadi_calls
+    # The same walks. The kernels agree to round-off (1e-11, test_compiled_and_casadi_evaluation_agree;
+    # bit for bit on x86-64 today, but a compiler may contract a*b+c into an FMA); the solvers then
+    # stop at |residual| < 1e-10, so a round-off difference can at most end a solve an iteration
+    # earlier or later, moving the solution by about tolerance x conditioning (~1e-9 relative).
+    # 1e-7 leaves margin for that and still fails on any real difference (a wrong kernel moves the
+    # torques by 1e-3 and more).
+    assert len(results["1"]) == len(results["0"]) == len(variants)
+    for (method, stance), compiled, plain in zip(variants, results["1"], results["0"]):
+        where = f"{method}/{stance}"
+        assert compiled.status == plain.status == "ok", where
+        assert len(compiled.steps) == len(plain.steps) == len(spec.plans), where
+        for k, (a, b) in enumerate(zip(compiled.steps, plain.steps)):
+            names = [sp.name for sp in a.subphases]
+            assert names == [sp.name for sp in b.subphases] == ["stance", "swing1", "swing2", "swing3"], (where, k)
             for sa, sb in zip(a.subphases, b.subphases):
+                at = (where, k, sa.name)
+                assert sa.success and sb.success and sa.parameters.keys() == sb.parameters.keys(), at
                 for key, value in sa.parameters.items():
-                    assert sb.parameters[key] == pytest.approx(value, rel=1e-7, abs=1e-9), (sa.name, key)
+                    assert sb.parameters[key] == pytest.approx(value, rel=1e-7, abs=1e-9), (*at, key)
+                np.testing.assert_allclose(sb.t, sa.t, rtol=1e-7, atol=1e-9, err_msg=str(at))
+                np.testing.assert_allclose(sb.states, sa.states, rtol=1e-7, atol=1e-8, err_msg=str(at))
 
 
 def test_condensed_newton_step_is_the_full_newton_step(problems):
@@ -247,16 +374,48 @@ def test_chord_steps_reach_the_root_of_fresh_newton(problems):
 @requires_compiler
 def test_prepare_compiles_every_subphase_at_once(tmp_path, monkeypatch):
     """A walk's first solver call compiles the kernels of all four subphases in parallel threads
-    (CasADi's symbolic work one thread at a time): each ends up compiled, each in its own library."""
+    (CasADi's symbolic work one thread at a time): the four compilers run at the same time, and
+    each subphase ends up with its own compiled library in the cache, used by its kernels."""
     from klaw_ocp.control.stance_spec import stance_spec
     from klaw_ocp.control.swing_spec import swing_specs
     monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
-    integrator.subphase_kernels.cache_clear()
     specs = [stance_spec("momentum", False), *swing_specs("momentum").values()]
+    # prefetch uses min(libraries, cores) threads: four "cores", so that the overlap shown below
+    # does not depend on the machine the suite runs on
+    monkeypatch.setattr(kernels.os, "cpu_count", lambda: len(specs))
+    # every compiler call waits at a barrier until all four are running: if the compiles ran one
+    # after another, the first would wait in vain (the timeout is only reached then)
+    barrier, builds, run = threading.Barrier(len(specs), timeout=30), [], subprocess.run
+
+    def compiler_run(cmd, *args, **kwargs):
+        if "-o" not in cmd:                 # the compiler's --version, not a build
+            return run(cmd, *args, **kwargs)
+        try:
+            barrier.wait()
+            together = True
+        except threading.BrokenBarrierError:
+            together = False
+        builds.append({"thread": threading.get_ident(), "together": together})
+        return run(cmd, *args, **kwargs)
+
+    monkeypatch.setattr(kernels.subprocess, "run", compiler_run)
+    integrator.subphase_kernels.cache_clear()
     try:
         MultipleShootingSolver().prepare(specs)
-        libraries = [subphase_kernels(spec, 4, 20).library for spec in specs]
-        assert all(lib.compiled for lib in libraries)
-        assert len({lib.path for lib in libraries}) == 4 == len(list(tmp_path.rglob("*.so")))
+        assert len(builds) == len(specs), "prepare compiled each subphase's library once"
+        assert all(b["together"] for b in builds), "the four compilers ran at the same time"
+        assert len({b["thread"] for b in builds}) == len(specs)
+        libraries = list(tmp_path.rglob("*.so"))
+        assert len(libraries) == len(specs) and not list(tmp_path.rglob(".build-*"))
+        rng = np.random.default_rng(0)
+        for spec in specs:
+            k = subphase_kernels(spec, 4, 20)        # what prepare loaded (the per-process cache)
+            assert k.library.compiled and k.library.path in libraries
+            assert isinstance(k.final, kernels._CFunction), "the kernels call the compiled library"
+            x, c = rng.uniform(-0.5, 0.5, spec.nx), rng.uniform(0.5, 1.0, spec.nc)
+            np.testing.assert_allclose(k.final(x, c)[0], np.asarray(spec.final(x, c)).ravel(),
+                                       rtol=1e-12, atol=1e-12, err_msg=spec.name)
+        assert len({subphase_kernels(spec, 4, 20).library.path for spec in specs}) == len(specs)
+        assert len(builds) == len(specs), "using the kernels after prepare compiles nothing more"
     finally:
         integrator.subphase_kernels.cache_clear()

@@ -36,10 +36,43 @@ def _read(path):
 TIMINGS = ("wall_s", "build_s", "max_subphase_s")
 
 
-def _without_wall(table):
-    """The rows without their timing columns (which differ from run to run)."""
-    keep = [i for i, name in enumerate(table[0]) if name not in TIMINGS]
-    return [[row[i] for i in keep] for row in table]
+#: result columns compared as numbers: what the walk measured (the residual is separate)
+MEASURED = ("mean_speed_kmh", "hip_excursion_m", "peak_F_w", "peak_F_theta1", "peak_F_theta2", "peak_pa",
+            "peak_F_theta3", "peak_F_theta4")
+
+
+def _assert_same_rows(table, expected):
+    """The sweep's rows are the reference rows, the same walks in the same order.
+
+    Text (the varied value as given, method, status, the failure columns, fallbacks, message)
+    and the number of steps must match exactly. Numbers are compared as numbers: a worker may
+    run on another CPU (or load a BLAS tuned for another core), which changes round-off (~1e-16
+    relative) that the solvers, stopping at |residual| < 1e-10, carry into the walk at about
+    tolerance x conditioning (~1e-9 relative). So the measured columns agree to 1e-7 relative
+    (another walk differs by 1e-3 and more; even 1e-3 N on a 1100 N peak force is 9e-7); the residual,
+    itself round-off below the acceptance threshold 1e-9 of the solvers, to 1e-9 absolute; the
+    iterations, which a residual that round-off moves across the tolerance may change by one per
+    solve, to one per subphase (four per step). The timing columns differ from run to run.
+    """
+    assert table[0] == expected[0] == HEADER
+    assert len(table) == len(expected), "one row per walk, none missing, none extra"
+    for got, want in zip(table[1:], expected[1:]):
+        got, want = dict(zip(HEADER, got)), dict(zip(HEADER, want))
+        label = (want["walk.speed"], want["method"])
+        for column in HEADER:
+            if column in TIMINGS:
+                assert (got[column] == "") == (want[column] == ""), (label, column)
+            elif column in MEASURED:
+                assert (got[column] == "") == (want[column] == ""), (label, column)
+                if want[column]:
+                    value = pytest.approx(float(want[column]), rel=1e-7, abs=1e-12)
+                    assert float(got[column]) == value, (label, column)
+            elif column == "residual" and want[column]:
+                assert got[column] and abs(float(got[column]) - float(want[column])) <= 1e-9, (label, column)
+            elif column == "iterations" and want[column]:
+                assert abs(int(got[column]) - int(want[column])) <= 4 * int(want["steps"]), (label, column)
+            else:
+                assert got[column] == want[column], (label, column)
 
 
 @pytest.fixture(scope="module")
@@ -204,14 +237,59 @@ def test_fallbacks_column_reads_the_summary(monkeypatch):
     assert row["status"] == "ok" and row["fallbacks"] == "step1.swing2:ipopt;step1.swing2:smaller-step"
 
 
-def test_map_with_three_paths_and_categories(tmp_path):
-    from klaw_ocp.io.sweep_plot import write_sweep_png
+def test_map_with_three_paths_and_categories(tmp_path, monkeypatch):
+    """Speed on x (numeric), start_from_rest on y (categorical), aggregated over body.height: one
+    panel per method, four cells of two walks each; the (3, true) cell holds the failed walk."""
+    import matplotlib.image as mpimg
+    import numpy as np
+    from matplotlib import colormaps
+    from matplotlib.colors import to_rgb
+
+    from klaw_ocp.io import sweep_plot
     rows = [{"walk.speed": v, "walk.start_from_rest": r, "body.height": h, "method": m,
-             "status": "failed" if (v, r, h) == (3, True, 1.7) else "ok", "wall_s": 1.0 + v,
+             "status": "failed" if (v, r, h) == (3, True, 1.7) else "ok", "wall_s": v + (1.5 if h == 1.8 else 1.0),
              "failed_step": 0, "failed_subphase": "stance"}
             for v in (1, 3) for r in (True, False) for h in (1.7, 1.8) for m in sweep.METHODS]
-    path = write_sweep_png(rows, ["walk.speed", "walk.start_from_rest", "body.height"], tmp_path / "m.png")
-    assert path.read_bytes()[:4] == b"\x89PNG"
+    paths = ["walk.speed", "walk.start_from_rest", "body.height"]
+    # the data the map is drawn from: per method, four cells of two walks (the two heights), the
+    # larger wall time of the two
+    for method in sweep.METHODS:
+        cells = sweep_plot._cells([r for r in rows if r["method"] == method], paths[0], paths[1])
+        assert {k: (c["ok"], c["wall"], c["n"]) for k, c in cells.items()} == {
+            ("1", "true"): (True, 2.5, 2), ("1", "false"): (True, 2.5, 2),
+            ("3", "true"): (False, 4.5, 2), ("3", "false"): (True, 4.5, 2)}
+        assert cells[("3", "true")]["row"]["body.height"] == 1.7
+    figures = []
+    figure = sweep_plot.sweep_figure
+
+    def keep(*args, **kwargs):
+        figures.append(figure(*args, **kwargs))
+        return figures[-1]
+    monkeypatch.setattr(sweep_plot, "sweep_figure", keep)
+    path = sweep_plot.write_sweep_png(rows, paths, tmp_path / "m.png")
+    (fig,) = figures                       # the figure that was saved (drawn, so laid out)
+    assert "16 walks, 14 ok, 2 failed, 0 error" in fig._suptitle.get_text()
+    assert "aggregated over body.height" in fig._suptitle.get_text()
+    panels = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title() for ax in panels] == [f"{m}: 6/8 ok" for m in sweep.METHODS]
+    assert [t.get_text() for t in panels[0].get_yticklabels()] == ["true", "false"]   # grid order
+    # the image written is the figure: its size, and the cells' colours where the cells are
+    image = mpimg.imread(path)
+    width, height = (sweep_plot._PANEL_IN * len(sweep.METHODS) + 1.4) * sweep_plot._DPI, 4.4 * sweep_plot._DPI
+    assert image.shape[:2] == (round(height), round(width))
+    assert len(np.unique(image[..., :3].reshape(-1, 3), axis=0)) > 50, "not a blank image"
+    viridis = colormaps["viridis"]
+    expected = {(1.0, 0.0): viridis(0.0), (1.0, 1.0): viridis(0.0), (3.0, 1.0): viridis(1.0),   # 2.5 s, 4.5 s
+                (3.0, 0.0): sweep_plot._FAIL_COLOUR}                                              # the 'x'
+    for ax in panels:
+        assert [t.get_text() for t in ax.get_xticklabels()] == ["1", "3"]
+        offsets = sorted(tuple(xy) for c in ax.collections for xy in c.get_offsets())
+        assert offsets == sorted(expected)
+        assert [t.get_text() for t in ax.texts] == ["step 0\nstance"]    # the failed walk's label
+        for (x, y), colour in expected.items():
+            px, py = ax.transData.transform((x, y))
+            pixel = image[int(np.rint(height - py)), int(np.rint(px)), :3]   # rows count from the top
+            np.testing.assert_allclose(pixel, to_rgb(colour), atol=0.02, err_msg=f"{ax.get_title()} ({x}, {y})")
 
 
 # ------------------------------------------------------------------------------------ executors
@@ -220,7 +298,7 @@ def test_process_pool_gives_the_same_rows(reference, tmp_path):
     config, expected = reference
     assert main(["sweep", str(config), "--vary", "walk.speed=4,5", "--workers", "2", "--quiet",
                  "--out", str(tmp_path / "o")]) == 0
-    assert _without_wall(_read(tmp_path / "o" / "sweep.csv")) == _without_wall(expected)
+    _assert_same_rows(_read(tmp_path / "o" / "sweep.csv"), expected)
 
 
 def test_dask_cluster_gives_the_same_rows(reference, tmp_path):
@@ -230,7 +308,7 @@ def test_dask_cluster_gives_the_same_rows(reference, tmp_path):
                                   dashboard_address=None) as cluster:
         assert main(["sweep", str(config), "--vary", "walk.speed=4,5", "--scheduler", cluster.scheduler_address,
                      "--quiet", "--out", str(tmp_path / "o")]) == 0
-    assert _without_wall(_read(tmp_path / "o" / "sweep.csv")) == _without_wall(expected)
+    _assert_same_rows(_read(tmp_path / "o" / "sweep.csv"), expected)
 
 
 def test_missing_dask_is_one_line(short_config, tmp_path, capsys, monkeypatch):
