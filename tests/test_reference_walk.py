@@ -19,9 +19,9 @@
    solvers' code (RK4 interval, kernels, specs) is used. The final state must meet the subphase's
    eq. 3 conditions (stance: w, theta1; swing1, swing3: theta3; swing2: theta4 = 0) to
    :data:`FINAL_TOL`, a bound on the solver's own integration error. The initial states and
-   contexts are today's walk's (the comparison holds it to the reference). Swing1 misses by more,
-   a solver defect (:data:`SWING1_DEFECT`): it is held to FINAL_TOL as a strict xfail and, so that
-   a gross error still fails, to the defect's size. It sees a 0.1 % error in any torque and in the
+   contexts are today's walk's (the comparison holds it to the reference). This check found the
+   RK4's evaluation of F_theta1's switch at the node (solvers/integrator.py, ``LAST_STAGE``): swing1
+   missed theta3 by up to 9e-5 rad until the fix. It sees a 0.1 % error in any torque and in the
    monitored pa offset, not in one knot of the tracking pa profile (the final conditions hardly
    depend on it; the comparison holds the knots). Three steps per mode cost about 2.5 s of CPU;
    all 22 would cost about 17 s.
@@ -143,15 +143,6 @@ CHECKED_STEPS = (0, 1, -1)
 #: leg length, 1e-4 degrees.
 FINAL_TOL = 2e-6
 IVP_TOL = 1e-9
-#: swing1's miss with the defect below: at most 9.0e-5 rad over all 66 steps; 3x that (0.015 deg)
-SWING1_DEFECT_TOL = 3e-4
-SWING1_DEFECT = (
-    "solver defect: the RK4 stage at the end of the interval ending at t_off = 0.4 t_step lands at "
-    "t_off + 2.8e-17 in swing1's grid (t_off - 2.8e-17 in the stance's), so F_theta1's step input "
-    "(t < t_off) is already off there: the stance re-simulated inside swing1 drifts from the stance "
-    "subphase (theta1 5e-5 rad, theta1d 3.6e-4 rad/s by t1) and the exact swing1 misses theta3 by up "
-    "to 9e-5 rad. Remove this mark when the integrator evaluates a breakpoint's left limit.")
-
 
 PA_KNOTS = [k for k in REFERENCE["modes"][MAKER.MODES[0]]["steps"][0]["stance"] if k.startswith("pa_knot_")]
 
@@ -265,9 +256,7 @@ def final_condition_misses(mode: str, name: str) -> dict:
 def _subphase_cases():
     for mode in MAKER.MODES:
         for name in ("stance", "swing1", "swing2", "swing3"):
-            marks = [pytest.mark.xfail(strict=True, reason=SWING1_DEFECT)] if name == "swing1" else []
-            yield pytest.param(mode, name, FINAL_TOL, marks=marks, id=f"{mode}-{name}")
-        yield pytest.param(mode, "swing1", SWING1_DEFECT_TOL, id=f"{mode}-swing1-with-its-defect")
+            yield pytest.param(mode, name, FINAL_TOL, id=f"{mode}-{name}")
 
 
 @pytest.mark.parametrize("mode, name, tol", _subphase_cases())

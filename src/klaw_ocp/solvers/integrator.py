@@ -108,6 +108,18 @@ class SubphaseKernels:
         return fns
 
 
+#: Where in its substep the RK4's last stage evaluates the right-hand side: a billionth of the
+#: substep before its end. The torque shapes switch at grid nodes (F_theta1's step at 0.4 t_step
+#: is a breakpoint of every grid), and at the node itself ``t < t_off`` depends on round-off
+#: (t + h lands a few 1e-17 s either side of t_off on different grids), so the interval before
+#: the switch took the switched-off torque for a sixth of its last substep on some grids and not
+#: on others: up to 1.4e-2 rad/s at that node, and a swing whose re-simulated stance drifted
+#: 9e-3 from the stance it hangs from (tests/test_walk_checks.py). Just before the node the stage
+#: sees the interval's own (left) limit on every grid; for smooth right-hand sides the shift is
+#: a relative 1e-9 of one stage's time, far below the RK4's own error.
+LAST_STAGE = 1 - 1e-9
+
+
 def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.Function:
     """The RK4 interval as calls of the right-hand side (compact compiled code); with
     ``sensitivities`` also J = d xf / d(x, u), propagated through the same RK4 stages (the
@@ -135,7 +147,7 @@ def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.F
         k1, d1 = stage(xk, tk, S)
         k2, d2 = stage(xk + dt / 2 * k1, tk + dt / 2, S + dt / 2 * d1 if sensitivities else None)
         k3, d3 = stage(xk + dt / 2 * k2, tk + dt / 2, S + dt / 2 * d2 if sensitivities else None)
-        k4, d4 = stage(xk + dt * k3, tk + dt, S + dt * d3 if sensitivities else None)
+        k4, d4 = stage(xk + dt * k3, tk + dt * LAST_STAGE, S + dt * d3 if sensitivities else None)
         xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         if sensitivities:
             S = S + dt / 6 * (d1 + 2 * d2 + 2 * d3 + d4)
