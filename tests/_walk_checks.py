@@ -100,9 +100,9 @@ class Dense:
     gaps: list               # (stored sample k, max |x_k+1 - integrated x_k+1|) for each interval
 
 
-def _locked_after(events, t) -> bool:
-    """Whether the stance leg is locked at ``t`` (plain shooting's lock events, section 4.2)."""
-    locked = False
+def _locked_after(events, t, locked: bool = False) -> bool:
+    """Whether the stance leg is locked at ``t`` (plain shooting's lock events, section 4.2), from
+    ``locked`` at the subphase's start (a swing's stance may start locked: the stance's state)."""
     for name, t_event in sorted(events, key=lambda e: e[1]):
         if t_event <= t + 1e-12:
             locked = name == "leg_too_long"
@@ -122,7 +122,8 @@ def dense_trajectory(problem, solution, per_interval: int = 8, rtol: float = 1e-
     n, nx = len(t) - 1, spec.nx
     starts, h = t[:-1], np.diff(t)
     contexts = np.repeat(problem.context[:, None], n, axis=1)
-    contexts[_LOCKED, :] = [float(_locked_after(solution.events, t0)) for t0 in starts]
+    initially = bool(problem.context[_LOCKED])
+    contexts[_LOCKED, :] = [float(_locked_after(solution.events, t0, initially)) for t0 in starts]
     rhs_all = mapped(spec.rhs, n)
 
     def rhs(s, flat):

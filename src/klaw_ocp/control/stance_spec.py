@@ -48,14 +48,46 @@ def _lock(rule: str):
             x[:6] = np.asarray(impact_functions()["stance_lock"](x[:6], c[:N_BODY_PARAMETERS])).ravel()
         c = c.copy()
         c[_LOCKED] = 1.0
-        return x, c, {**mode, "locked": True, "early_lock": True}
+        return x, c, _MODE_AFTER["leg_too_long"](mode)
     return apply
 
 
 def _unlock(x, c, mode):
     c = c.copy()
     c[_LOCKED] = 0.0
-    return x, c, {**mode, "locked": False}
+    return x, c, _MODE_AFTER["leg_vertical"](mode)
+
+
+# The mode switches of the two events, apart from their state maps, so that a subphase's lock state
+# at any time can be replayed from its event log (:func:`lock_mode`): the swing re-simulates the
+# stance and must start in the lock state the stance (or the previous swing subphase) is in then.
+# The leg locks early at most once per stance ("early_lock"), and unlocks at the vertical.
+_MODE_AFTER = {
+    "leg_too_long": lambda mode: {**mode, "locked": True, "early_lock": True},
+    "leg_vertical": lambda mode: {**mode, "locked": False},
+}
+#: the mode of a subphase that re-simulates a stance without lock events (the closing stance of a
+#: walk that ends at rest): the swings of that step disarm the events their spec shares with every
+#: other step, instead of compiling a second set of swing kernels
+NO_LOCK_EVENTS = {"locked": False, "lock_events": False}
+
+
+def lock_mode(events, until: float = float("inf"), mode: dict | None = None) -> dict:
+    """The lock mode after the events ``(name, t)`` with t <= ``until``, starting from ``mode``
+    (default: heel strike's, unlocked and armed)."""
+    mode = dict(mode or {})
+    for name, t in sorted(events, key=lambda e: e[1]):
+        if t <= until and name in _MODE_AFTER:
+            mode = _MODE_AFTER[name](mode)
+    return mode
+
+
+def lock_context(c: np.ndarray, mode: dict) -> np.ndarray:
+    """The context ``c`` (any that starts with :data:`STANCE_CONTEXT`) with its ``locked`` entry
+    set as ``mode`` says: the stance model's rigid leg while the leg is locked."""
+    c = np.array(c, float)
+    c[_LOCKED] = 1.0 if mode.get("locked") else 0.0
+    return c
 
 
 def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
@@ -65,7 +97,8 @@ def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
     args = [x, t, u, c]
     return (
         Event("leg_too_long", ca.Function("leg_too_long", args, [x[0] - c[_L1]]), +1,
-              lambda x, t, c, mode: not mode.get("locked") and not mode.get("early_lock") and x[1] < 0,
+              lambda x, t, c, mode: (mode.get("lock_events", True) and not mode.get("locked")
+                                     and not mode.get("early_lock") and x[1] < 0),
               _lock(lock_rule)),
         Event("leg_vertical", ca.Function("leg_vertical", args, [x[1]]), +1,
               lambda x, t, c, mode: bool(mode.get("locked")), _unlock),

@@ -28,7 +28,8 @@ from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metata
                              swing1_end_posture, toe_off_pitch)
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
-from .stance_spec import lock_rule_nodes, stance_fixed, stance_path_bounds, stance_spec, stance_unknowns
+from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
+                          stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -226,24 +227,35 @@ class StepController:
                    **{f"P{i}": coeffs[i] for i in range(5)})
         c = SWING_CONTEXT.pack(ctx)
         specs = self.swing_specs
+        # The swing re-simulates the stance (swing_law.py), so with plain shooting's lock events it
+        # must start in the stance's lock state at toe-off: locked after an early 'leg_too_long'
+        # not yet undone by 'leg_vertical'; in the closing step, whose stance has no lock events,
+        # with the swing specs' events disarmed. Each later subphase starts in the mode the one
+        # before ended in. Multiple shooting has no events: its modes are unlocked and unused.
+        mode1 = NO_LOCK_EVENTS if at_rest else lock_mode(stance.events, stance.t[k_to])
+        c1 = lock_context(c, mode1)
         s1 = self._solve(index, SubphaseProblem(
             specs["swing1"], np.concatenate([x_to, [leg_to.theta3, leg_to.theta4, th3d_to]]),
-            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c, self._guess("swing1", 1), self.scales["swing1"]))
+            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 1), self.scales["swing1"],
+            mode=mode1))
         x_end1 = s1.final_state
-        th4d = float(np.asarray(specs["swing1"].rhs(x_end1, t1, [s1.parameters["F_theta3_magnitude"]], c)).ravel()[7])
+        mode2 = lock_mode(s1.events, mode=mode1)
+        c2 = lock_context(c, mode2)
+        th4d = float(np.asarray(specs["swing1"].rhs(x_end1, t1, [s1.parameters["F_theta3_magnitude"]], c2)).ravel()[7])
         guess2 = self._guess("swing2", 2)
         guess2[1] = 0.0
         s2 = self._solve(index, SubphaseProblem(
-            specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c,
+            specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c2,
             guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance]),
-            recovery_step=np.array([0.0, -0.005])))
+            recovery_step=np.array([0.0, -0.005]), mode=mode2))
         x_end2 = s2.final_state
         knee = knee_lock_map(b, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         th3d_locked = knee[2]
+        mode3 = lock_mode(s2.events, mode=mode2)
         s3 = self._solve(index, SubphaseProblem(
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
-            time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c, self._guess("swing3", 1),
-            self.scales["swing3"]))
+            time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), lock_context(c, mode3), self._guess("swing3", 1),
+            self.scales["swing3"], mode=mode3))
         nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
         heel = np.asarray(mapped(specs["swing3"].path, nodes)(
             s3.states[:-1].T, s3.t[:-1], [s3.parameters["F_theta3_moment"]], c)).ravel()

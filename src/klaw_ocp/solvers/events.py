@@ -36,7 +36,8 @@ class EventIntegrator:
         if start is None:
             return pb.grid.copy(), states, pb.context.copy(), []
         step = lambda x, t, h, u, c: kernels.step(x, t, h, u, c)[0]
-        c, mode = pb.context.copy(), {}
+        # the problem's mode, not heel strike's: a swing may start with the stance leg locked
+        c, mode = pb.context.copy(), dict(pb.mode)
         x = states[start].copy()
         times, out, log = list(pb.grid[: start + 1]), list(states[: start + 1]), []
         for k in range(start, n):
@@ -61,7 +62,7 @@ class EventIntegrator:
         return np.array(times), np.array(out), c, log
 
     def _first_sign_change(self, kernels, pb, states, u):
-        """Index of the first interval on which an event armed in the initial mode fires."""
+        """Index of the first interval on which an event armed in the initial mode (``pb.mode``) fires."""
         values = kernels.samples(states, pb.grid, u, pb.context)[3]
         first = None
         for e, event in enumerate(kernels.spec.events):
@@ -69,7 +70,7 @@ class EventIntegrator:
             for k in range(len(states) - 1):
                 if first is not None and k >= first:
                     break
-                if values[k, e] * d < 0 <= values[k + 1, e] * d and event.guard(states[k], pb.grid[k], pb.context, {}):
+                if values[k, e] * d < 0 <= values[k + 1, e] * d and event.guard(states[k], pb.grid[k], pb.context, pb.mode):
                     first = k
                     break
         return first

@@ -88,6 +88,9 @@ class SubphaseProblem:
     also be a callable ``(t, states, context) -> (N+1, nh)``, for inequalities whose nodes depend
     on the motion (the stance lock rule). ``optimize``: solve as the optimal control problem with
     the spec's residuals and every unknown free, even when the square solution is feasible.
+    ``mode``: the event mode forward integration starts in (plain shooting; multiple shooting has
+    no events): a swing re-simulates the stance from the lock state the stance is in at its start,
+    with ``context`` agreeing (its ``locked`` entry; control/stance_spec.py, ``lock_mode``).
     """
     spec: SubphaseSpec
     x0: np.ndarray
@@ -100,6 +103,7 @@ class SubphaseProblem:
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
     optimize: bool = False
+    mode: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.x0 = np.asarray(self.x0, float).ravel()
