@@ -16,7 +16,7 @@ EXPECTED_DEFAULTS = {
     "step_length_min_rel": 0.2, "max_speed_change_per_step": 1.0, "start_speed_max": 5.0, "max_step_length_change_rel": 0.15,
     "parameter_consistency_tolerance": 0.01,
     "swing1_end_fraction": 0.5, "swing2_end_fraction": 0.85, "theta1_torque_off_fraction": 0.4,
-    "theta5_impact": 90, "theta6_impact": 0, "heel_off_theta5": 80, "meta_off_theta6": 30,
+    "theta5_impact": 90, "theta6_impact": 0, "foot_flat_fraction": 0.08, "heel_off_theta5": 112, "meta_off_theta6": 30,
     "toe_off_foot_pitch": 45, "toe_clearance": 0.015, "swing_peak_position": 0.3,
     "ankle_peak_height_rel": 0.20, "ankle_peak_height_speed_slope": 0.01,
     "swing1_torque_time_constant": 0.3, "swing2_knee_time_constant": 0.3,

@@ -28,6 +28,7 @@ from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
 from .dynamics import heel_strike_map, stance_hip
 from .errors import ConvergenceError
+from .kinematics.virtual_leg import StanceFoot, hind_foot_at_rest
 from .solvers import make_solver
 
 
@@ -149,11 +150,18 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
         inp = _first_input(controller, spec)
         walk.initial_state = inp.x0.copy()
         plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
+        # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes the
+        # next step's hind leg, whose toe-off starts that step's swing1
+        inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x)
         for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
             plan = plans[k]
             result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
+            if walk.steps:   # this step's double support completed the previous stance leg
+                walk.steps[-1].complete_stance_leg(result)
             walk.steps.append(result)
             inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
+            if inp is not None:
+                inp.hind_foot = stance_foot(spec, result)
     except ConvergenceError as err:
         walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
         err.partial = walk
@@ -181,6 +189,18 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     y_end = next_plan.constraints.hip_y - b.l9
     excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
     return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion)
+
+
+def stance_foot(spec: WalkSpec, result: StepResult) -> StanceFoot:
+    """The virtual leg's rules for the stance leg of ``result`` (§4.2): its heel-strike foot from
+    the first hip (flat for the first step from rest), its heel-off from the stance's hips; the next
+    step's double support completes it."""
+    body, attrs, t_step = spec.body, spec.attributes, result.plan.timings.t_step
+    if result.index == 0 and spec.start_from_rest:
+        foot = StanceFoot.standing(body, attrs, result.origin_x, t_step)
+    else:
+        foot = StanceFoot.at_heel_strike(body, attrs, result.origin_x, result.stance_hips[0], t_step)
+    return foot.find_heel_off(result.subphase("stance").t, result.stance_hips)
 
 
 def walk_spec(config, method: str | None = None) -> WalkSpec:

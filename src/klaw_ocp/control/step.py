@@ -24,14 +24,23 @@ MIN_CURVE_P_TRAVEL = 0.4
 #: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
 TOE_OFF_RATE_WINDOW = 0.1
 
-from .double_support import (ankle_angle, curve_p_coefficients, hind_leg, metatarsal_offset, reach_pitch,
-                             swing1_end_posture, toe_off_pitch)
+from ..kinematics.virtual_leg import toe_off_pitch
+from .double_support import curve_p_coefficients, swing1_end_posture
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
+
+
+@dataclass(frozen=True)
+class _Leg:
+    """The hind leg at toe-off: thigh and knee angles (swing-model convention), foot pitch, ankle."""
+    theta3: float
+    theta4: float
+    pitch: float
+    ankle: np.ndarray
 
 
 @dataclass
@@ -42,6 +51,8 @@ class StepInput:
     hind_ankle_x: float            # flat-foot ankle x of the hind (soon swinging) leg
     y_start: float                 # hip height above the stance ankle at heel strike
     excursion: float               # height of the hip's mid-step bump (0 for start/stop steps)
+    #: the hind leg's virtual leg (kinematics.virtual_leg.StanceFoot): its stance so far
+    hind_foot: object = None
 
 
 @dataclass
@@ -61,6 +72,30 @@ class StepResult:
     #: the hip-height sinusoid the stance is guided towards (§4.2), in the stance ankle's frame:
     #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m
     hip_reference: dict = field(default_factory=dict)
+    #: the hind leg's virtual leg, completed by this step's double support, and its samples there
+    #: (leg stance time, world hips)
+    hind_foot: object = None
+    hind_samples: tuple = ()
+    #: this step's stance leg, completed by the next step's double support (:meth:`complete_stance_leg`)
+    stance_foot: object = None
+    stance_samples: tuple = ()
+    #: the world hip at every stance node (m)
+    stance_hips: np.ndarray = None
+
+    def complete_stance_leg(self, following: "StepResult") -> None:
+        """The next step's double support finished this stance leg: keep its rules and samples."""
+        self.stance_foot = following.hind_foot
+        self.stance_samples = following.hind_samples
+
+    def stance_leg_frames(self):
+        """This step's stance leg as a human leg (kinematics.virtual_leg.VirtualLegFrames) from its
+        heel strike to its toe-off, at the stance's nodes and the next double support's; None until
+        the next step has completed it."""
+        if self.stance_foot is None:
+            return None
+        t_after, hips_after = self.stance_samples
+        t = np.concatenate([self.subphase("stance").t, t_after[1:]])
+        return self.stance_foot.frames(t, np.vstack([self.stance_hips, hips_after[1:]]))
 
     def subphase(self, name: str) -> SubphaseSolution:
         return next(s for s in self.subphases if s.name == name)
@@ -178,32 +213,30 @@ class StepController:
         def node(time):
             return int(np.argmin(np.abs(stance.t - time)))
 
-        # hind leg: toe on the ground, foot pitching about the metatarsal head until toe-off
+        # hind leg: the previous stance's virtual leg (kinematics.virtual_leg) goes on through the
+        # double support in the same foot periods, to toe-off, where swing1 starts from it
         t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
-        mt_x = inp.hind_ankle_x + metatarsal_offset(b)
-        hip0 = hips[0]
-        pitch0 = reach_pitch(b, hip0, mt_x)
         k_to = node(t_to)
         x_to, hip_to, hip_vel_to = stance.states[k_to], hips[k_to], hip_vels[k_to]
-        pitch_to = toe_off_pitch(b, hip_to, mt_x, pitch0, math.radians(a.toe_off_foot_pitch), con.theta3)
-        ds_nodes = [k for k in range(len(stance.t)) if stance.t[k] <= t_to + 1e-12]
-        ds = {"t": [], "theta3": [], "theta4": [], "pitch": []}
-        for k in ds_nodes:
-            leg = hind_leg(b, hips[k], mt_x, stance.t[k], t_to, pitch0, pitch_to)
-            for key, val in (("t", stance.t[k]), ("theta3", leg.theta3), ("theta4", leg.theta4), ("pitch", leg.pitch)):
-                ds[key].append(val)
-        leg_to = hind_leg(b, hip_to, mt_x, t_to, t_to, pitch0, pitch_to)
+        hind = inp.hind_foot
+        t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
+        start = max(float(hind.pitch(np.array([t0 - 1e-12]), hips[:1])[0]), 0.0) if t0 > 0 else 0.0
+        pitch_to = toe_off_pitch(hind, hip_to, start, math.radians(a.toe_off_foot_pitch), con.theta3)
+        hind = hind.with_double_support(hips[0], t_to, pitch_to)
+        ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
+        legs = hind.frames(t0 + stance.t[ds_nodes], hips[ds_nodes])
+        ds = {"t": stance.t[ds_nodes], "theta3": legs.theta3, "theta4": legs.theta4, "pitch": legs.pitch}
         # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
         # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached
         # full stretch, where its inverse kinematics is singular), and an infinitesimal difference
         # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
         window = TOE_OFF_RATE_WINDOW * t_to
-        leg_before = hind_leg(b, hip_to - window * hip_vel_to, mt_x, t_to - window, t_to, pitch0, pitch_to)
-        th3d_to = (leg_to.theta3 - leg_before.theta3) / window
+        ends = hind.frames(t0 + np.array([t_to, t_to - window]), np.array([hip_to, hip_to - window * hip_vel_to]))
+        leg_to = _Leg(float(ends.theta3[0]), float(ends.theta4[0]), float(ends.pitch[0]), ends.ankle[0])
+        th3d_to = float(ends.theta3[0] - ends.theta3[1]) / window
 
         # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
-        theta5_to = ankle_angle(leg_to.theta3 + leg_to.theta4, leg_to.pitch)
-        theta6_to = leg_to.pitch
+        theta5_to, theta6_to = float(ends.theta5[0]), float(ends.theta6[0])
         theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
         hip_t1 = hips[node(t1)]
         knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
@@ -268,4 +301,5 @@ class StepController:
                                    "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
                           final_stance_state=stance.final_state, heel_clearance_min=float(heel.min()) if heel.size else 0.0,
                           plan=plan, notes=notes,
-                          hip_reference={"y_start": inp.y_start, "y_end": sctx["y_end"], "excursion": inp.excursion})
+                          hip_reference={"y_start": inp.y_start, "y_end": sctx["y_end"], "excursion": inp.excursion},
+                          hind_foot=hind, hind_samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]), stance_hips=hips)

@@ -94,8 +94,13 @@ _SPECS = [
           "choice: angle between leg axis and the foot's long axis, neutral ≈ 90°"),
     _spec("foot", "theta6_impact", "deg", 0.0, -30.0, 30.0,
           "§4.3: the metatarsal angle at heel strike is 'specified as locomotion attributes'"),
-    _spec("foot", "heel_off_theta5", "deg", 80.0, 60.0, 110.0,
-          "§4.2: 'the normal period ends when the ankle angle θ5 reaches a limiting value'"),
+    _spec("foot", "foot_flat_fraction", "1", 0.08, 0.02, 0.2,
+          "§4.2: the normal period's foot 'rotates around the heel until it is flat'; when (fraction "
+          "of the cycle after heel strike; about 8 % in people) " + _OURS),
+    _spec("foot", "heel_off_theta5", "deg", 112.0, 90.0, 130.0,
+          "§4.2: 'the normal period ends when the ankle angle θ5 reaches a limiting value'; θ5 from "
+          "the shank's axis to the foot's, 90° neutral, more as the shank leans over the flat foot "
+          "(about 10° of dorsiflexion at heel-off in people); value " + _OURS),
     _spec("foot", "meta_off_theta6", "deg", 30.0, 0.0, 60.0,
           "§4.2: 'as soon as θ6 reaches a limit, the meta-off period is entered'"),
     _spec("foot", "toe_off_foot_pitch", "deg", 45.0, 10.0, 80.0,
@@ -159,8 +164,8 @@ ATTRIBUTES: Mapping[str, AttributeSpec] = MappingProxyType({s.name: s for s in _
 
 #: Registered and validated, but nothing in the package reads them yet, so they do not change a
 #: walk (the body/virtual-leg and pelvis issues will make them act). Remove a name when it acts.
-NOT_USED_YET = frozenset({"heel_off_theta5", "meta_off_theta6", "pelvic_rotation", "pelvic_list",
-                          "pelvic_lateral_shift", "foot_lateral_distance", "arm_swing_amplitude"})
+NOT_USED_YET = frozenset({"pelvic_rotation", "pelvic_list", "pelvic_lateral_shift", "foot_lateral_distance",
+                          "arm_swing_amplitude"})
 
 # Pairs (lower, upper) that must stay strictly ordered whatever the overrides.
 _ORDERED_PAIRS = (("sf_min", "sf_max"), ("speed_min", "speed_max"),

@@ -1,6 +1,7 @@
 """Kinematic "cosmetics" (section 4, principles 2 and 3): the 37-joint skeleton and its angles
-(:mod:`.skeleton`, :mod:`.pose`). The virtual leg with its foot periods and the determinants of
-gait (pelvis) join them here (issue #10, in progress).
+(:mod:`.skeleton`, :mod:`.pose`) and the virtual leg with its three foot periods
+(:mod:`.virtual_leg`). The determinants of gait (pelvis), the swing foot and the upper body join
+them here (issue #22, in progress).
 
 This is to be the one package that reaches back into the dynamics (the pelvis giving the swing
 model its hip, the virtual leg giving swing1 its toe-off posture). The physics

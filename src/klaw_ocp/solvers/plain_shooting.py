@@ -33,7 +33,7 @@ class PlainShootingSolver:
 
     def __init__(self, intervals: int = 20, substeps: int = 4, tolerance: float = 1e-10,
                  max_iterations: int = 60, bisection_steps: int = 4, max_sweeps: int = 40,
-                 max_recovery_steps: int = 200):
+                 max_recovery_steps: int = 400):
         self.intervals, self.substeps = int(intervals), int(substeps)
         self.tolerance, self.max_iterations = float(tolerance), int(max_iterations)
         self.bisection_steps, self.max_sweeps = int(bisection_steps), int(max_sweeps)
@@ -331,7 +331,9 @@ class PlainShootingSolver:
             if ok:
                 result = (solved[hi], residual)
                 break
-            lo, hi = hi, 2 * hi
+            if hi == self.max_recovery_steps:
+                break
+            lo, hi = hi, min(2 * hi, self.max_recovery_steps)   # the last try is the cap itself
         if result is None:   # not cleared within max_recovery_steps: report the last attempt
             return solved[lo], residual, shots, lo
         while hi - lo > 1:

@@ -1,0 +1,394 @@
+"""The virtual leg (§4.2, figure 6): a human leg superimposed on the telescopic stance leg.
+
+"H is known from the simulation, T is fixed during stance": between the simulated hip and the
+foot on the ground the thigh (l3), shank (l4) and foot (Table B-1 rows 8-13) follow the paper's
+three periods, from the leg's heel strike to its toe-off (t_step of its own stance, then the
+double support of the next step, t_ds later):
+
+- **normal**: from heel strike the foot rotates about the heel until it is flat, then stays flat
+  while the shank rotates over it. The paper leaves open what fixes the foot while it rotates about
+  the heel; we let it come down to flat at ``foot_flat_fraction`` of the cycle (about 8 % in
+  people), with zero rate at both ends (a smoothstep), and the knee follow by inverse kinematics;
+- **heel-off**: when the ankle angle θ5 reaches its limit (``heel_off_theta5``, a dorsiflexion:
+  θ5 is the angle from the shank's axis to the foot's, 90° neutral, more when the shank leans
+  forward over the foot) the foot rotates about the first metatarsal head (radius l12) while the
+  toe stays flat on the ground, so θ6 equals the foot's pitch. In single support the ankle stays
+  at its limit (the pitch solves θ5 = limit: the heel comes up because the ankle stops giving);
+  from the other leg's heel strike the pitch runs linearly to the toe-off pitch (the push-off);
+- **meta-off**: when θ6 reaches its limit (``meta_off_theta6``) the toe angle is held and the whole
+  foot rotates about the toe tip until toe-off.
+
+In every period the pitch is raised, where needed, to the least one at which the leg reaches its
+ankle with the knee ``REACH_FRACTION`` short of straight, and it never falls back (the heel does
+not come down again). Hip and knee angles follow by two-link inverse kinematics (knee forward).
+
+Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles in radians. Pitch
+``p`` is the foot's heel-up rotation (clockwise), negative while it rotates toe-up about the heel.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..body import Body
+
+#: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
+#: flexion): a fully straight knee is a singular point of the inverse kinematics.
+REACH_FRACTION = 1 - 1e-3
+#: The steepest foot the rules consider (rad): the foot stands almost on its toe.
+MAX_PITCH = math.radians(89)
+NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
+
+
+def _rotate(points: np.ndarray, pivot: np.ndarray, angle) -> np.ndarray:
+    """``points`` (n, 2) rotated counter-clockwise by ``angle`` (n,) about ``pivot`` (2,) or (n, 2)."""
+    c, s = np.cos(angle), np.sin(angle)
+    v = points - pivot
+    return pivot + np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
+
+
+def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Thigh angle θ3, knee flexion θ4 (swing-model convention: knee = hip - l3 (sin θ3, cos θ3))
+    and the knee, of the two-segment leg from ``hip`` to ``ankle`` (n, 2), knee forward. The
+    distance is clipped to l1 (the leg straight): :attr:`VirtualLegFrames.overreach` says by how much."""
+    d_vec = ankle - hip
+    l3, l4 = body.l3, body.l4
+    d = np.minimum(np.hypot(d_vec[:, 0], d_vec[:, 1]), l3 + l4)
+    beta = np.arctan2(-d_vec[:, 0], -d_vec[:, 1])
+    # the triangle's half-angle formulas: well conditioned at the straight knee, where arccos of
+    # the cosine law loses half the digits (1e-8 rad, 1e-8 m of hip)
+    s = (l3 + l4 + d) / 2
+    short = (l3 + l4 - d) / 2                          # s - d, exactly 0 for a straight leg
+    root = lambda v: np.sqrt(np.maximum(v, 0.0))
+    delta = 2 * np.arctan2(root((s - l3) * short), root(s * (s - l4)))     # at the hip
+    theta4 = 2 * np.arctan2(root(s * short), root((s - l3) * (s - l4)))     # knee flexion
+    theta3 = beta - delta
+    knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+    return theta3, theta4, knee
+
+
+@dataclass(frozen=True)
+class FlatFoot:
+    """The stance foot's points lying flat, its flat-foot ankle at (ankle_x, l9)."""
+    body: Body
+    ankle_x: float
+
+    @property
+    def ankle(self):
+        return np.array([self.ankle_x, self.body.l9])
+
+    @property
+    def heel(self):
+        return np.array([self.ankle_x - self.body.l8, 0.0])
+
+    @property
+    def metatarsal(self):
+        return np.array([self.ankle_x + math.sqrt(self.body.l12 ** 2 - self.body.l9 ** 2), 0.0])
+
+    @property
+    def toe(self):
+        return self.metatarsal + np.array([self.body.l13, 0.0])
+
+    def pose(self, pitch, meta_off_theta6: float, rocker_theta6=0.0) -> dict:
+        """Heel, ankle, metatarsal head, toe tip (n, 2), θ6 and the sole's counter-clockwise angle
+        (n,) at foot pitch ``pitch`` (n,): about the heel for p < 0 (with the toe angle
+        ``rocker_theta6``), about the metatarsal head for 0 <= p <= meta_off_theta6 (toe flat:
+        θ6 = p), about the toe tip beyond (θ6 held at meta_off_theta6)."""
+        p = np.atleast_1d(np.asarray(pitch, float))
+        n = p.size
+        rest = {k: np.tile(getattr(self, k), (n, 1)) for k in ("heel", "ankle", "metatarsal", "toe")}
+        q = meta_off_theta6
+        rocker, about_m = p < 0, p >= 0
+        out = {k: v.copy() for k, v in rest.items()}
+        # toe-up about the heel: the whole foot turns; the toe keeps its angle to the foot
+        sigma = np.where(rocker, -p, 0.0)
+        for k in ("ankle", "metatarsal"):
+            out[k] = np.where(rocker[:, None], _rotate(rest[k], self.heel, sigma), out[k])
+        theta6 = np.where(rocker, np.broadcast_to(rocker_theta6, (n,)), np.minimum(p, q))
+        forward = np.column_stack([np.cos(sigma + theta6), np.sin(sigma + theta6)])
+        out["toe"] = np.where(rocker[:, None], out["metatarsal"] + self.body.l13 * forward, out["toe"])
+        # heel up about the metatarsal head, then about the toe tip
+        first = np.where(about_m, -np.minimum(p, q), 0.0)
+        second = np.where(p > q, -(p - q), 0.0)
+        for k in ("heel", "ankle"):
+            turned = _rotate(_rotate(rest[k], self.metatarsal, first), self.toe, second)
+            out[k] = np.where(about_m[:, None], turned, out[k])
+        out["metatarsal"] = np.where(about_m[:, None], _rotate(rest["metatarsal"], self.toe, second),
+                                     out["metatarsal"])
+        out["theta6"] = theta6
+        out["sole"] = np.where(rocker, sigma, -p)
+        return out
+
+
+def ankle_angle(theta3, theta4, sole) -> np.ndarray:
+    """θ5: from the shank's upward axis (absolute angle φ = θ3 + θ4) counter-clockwise to the
+    backward sole direction (the sole turned counter-clockwise by ``sole`` from flat)."""
+    phi = theta3 + theta4
+    up = np.column_stack([np.sin(phi), np.cos(phi)])
+    back = np.column_stack([-np.cos(sole), -np.sin(sole)])
+    cross = up[:, 0] * back[:, 1] - up[:, 1] * back[:, 0]
+    return np.mod(np.arctan2(cross, np.sum(up * back, axis=1)), 2 * math.pi)
+
+
+def smoothstep(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u * u * (3 - 2 * u)
+
+
+@dataclass(frozen=True)
+class VirtualLegFrames:
+    """The virtual leg at n samples: world points (n, 2), angles (n,) and the period of each."""
+    t: np.ndarray
+    hip: np.ndarray
+    knee: np.ndarray
+    ankle: np.ndarray
+    heel: np.ndarray
+    metatarsal: np.ndarray
+    toe: np.ndarray
+    theta3: np.ndarray
+    theta4: np.ndarray
+    theta5: np.ndarray
+    theta6: np.ndarray
+    pitch: np.ndarray
+    period: np.ndarray
+    #: how far the hip was beyond the straight leg's reach (m; 0 when the leg reached)
+    overreach: np.ndarray
+
+
+@dataclass(frozen=True)
+class StanceFoot:
+    """The rules of one leg's stance, fixed at its heel strike (:meth:`at_heel_strike`) and
+    completed as the stance goes on: the heel-off time once it is known, and the double support's
+    pitches (:meth:`with_double_support`). ``t`` is the leg's stance time, 0 at its heel strike."""
+    foot: FlatFoot
+    rocker_pitch: float            # the pitch at heel strike (< 0: toe up about the heel)
+    rocker_theta6: float           # the toe angle at heel strike
+    t_flat: float                  # when the foot is flat
+    heel_off_theta5: float
+    meta_off_theta6: float
+    t_step: float                  # the other leg's heel strike: the double support begins
+    t_heel_off: float = math.inf
+    t_toe_off: float = math.inf
+    pitch_ds_start: float = 0.0    # the pitch at the other leg's heel strike
+    pitch_toe_off: float = 0.0
+    #: the single-support pitch at the stance's nodes, never falling (set by :meth:`find_heel_off`):
+    #: θ5 rises as the shank leans over the flat foot and falls again as the knee straightens, and
+    #: the heel does not come down again once it is off
+    single_t: tuple = ()
+    single_pitch: tuple = ()
+
+    @classmethod
+    def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float) -> "StanceFoot":
+        """The foot lands on its heel at (ankle_x - l8, 0) with the leg straight: its ankle is l1
+        from the hip and the heel-ankle distance from the heel, which fixes the heel-strike pitch."""
+        foot = FlatFoot(body, ankle_x)
+        heel, ankle0 = foot.heel, foot.ankle
+        r_heel = float(np.hypot(*(ankle0 - heel)))
+        to_hip = np.asarray(hip, float) - heel
+        dist = float(np.hypot(*to_hip))
+        # the circles |A - hip| = l1 and |A - heel| = r_heel: the intersection ahead of the heel
+        along = (dist ** 2 + r_heel ** 2 - body.l1 ** 2) / (2 * dist)
+        across = math.sqrt(max(r_heel ** 2 - along ** 2, 0.0))
+        e = to_hip / dist
+        ankle = heel + along * e + across * np.array([e[1], -e[0]])
+        sole_up = math.atan2(ankle[1] - heel[1], ankle[0] - heel[0]) - math.atan2(*(ankle0 - heel)[::-1])
+        return cls(foot, -sole_up, math.radians(attrs.theta6_impact),
+                   attrs.foot_flat_fraction * 2 * t_step, math.radians(attrs.heel_off_theta5),
+                   math.radians(attrs.meta_off_theta6), t_step)
+
+    @classmethod
+    def standing(cls, body: Body, attrs, ankle_x: float, t_step: float) -> "StanceFoot":
+        """The stance foot of a walk's first step from rest: flat on the ground from the start."""
+        return cls(FlatFoot(body, ankle_x), 0.0, 0.0, 0.0, math.radians(attrs.heel_off_theta5),
+                   math.radians(attrs.meta_off_theta6), t_step)
+
+    # -- the pitch rules ----------------------------------------------------------------------
+    def _ankle(self, pitch) -> np.ndarray:
+        """The ankle alone at foot pitch ``pitch`` (n,): :meth:`FlatFoot.pose`'s ankle, written out
+        for the root searches, which ask for it thousands of times a walk."""
+        p = np.atleast_1d(np.asarray(pitch, float))
+        f, q = self.foot, self.meta_off_theta6
+        heel, ankle0, meta, toe = f.heel, f.ankle, f.metatarsal, f.toe
+        c, s = math.cos(q), math.sin(q)
+        v = ankle0 - meta
+        ankle_q = meta + np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1]])   # turned by -q about M
+        pivot = np.where((p < 0)[:, None], heel, np.where((p <= q)[:, None], meta, toe))
+        start = np.where((p <= q)[:, None], ankle0, ankle_q)
+        turn = np.where(p <= q, -p, -(p - q))
+        d = start - pivot
+        ct, st = np.cos(turn), np.sin(turn)
+        return pivot + np.column_stack([ct * d[:, 0] - st * d[:, 1], st * d[:, 0] + ct * d[:, 1]])
+
+    def reach_pitch(self, hips: np.ndarray, fraction=1.0) -> np.ndarray:
+        """The least pitch >= 0 at which the leg reaches its ankle with the hip-ankle distance
+        ``fraction`` of l1 (a scalar or one per sample). Single support lets the knee straighten
+        (1); the double support bends it towards REACH_FRACTION by toe-off, where swing1 takes
+        over its rates. The heel-up ankle moves on a circle about the metatarsal head, then about
+        the toe tip, so each piece is a circle intersection, in closed form (the walk asks this at
+        every node of every step); the distance to the hip falls as the heel rises."""
+        hips = np.asarray(hips, float)
+        radius = self.foot.body.l1 * np.broadcast_to(fraction, (len(hips),))
+        q = self.meta_off_theta6
+        ankle0, ankle_q = self._ankle(np.array([0.0, q]))
+        pieces = ((self.foot.metatarsal, ankle0, 0.0, q), (self.foot.toe, ankle_q, q, MAX_PITCH))
+        pitch = np.full(len(hips), MAX_PITCH)
+        found = np.zeros(len(hips), bool)
+        for pivot, start, p0, p1 in pieces:
+            r = float(np.hypot(*(start - pivot)))
+            phi0 = math.atan2(start[1] - pivot[1], start[0] - pivot[0])   # the ankle at pitch p0
+            d = pivot - hips
+            dist = np.hypot(d[:, 0], d[:, 1])
+            # |pivot + r e(phi0 - (p - p0)) - hip| = R  <=>  d . e(psi) = K
+            k = (radius ** 2 - dist ** 2 - r ** 2) / (2 * r)
+            ok = (dist > 0) & (np.abs(k) <= dist)
+            alpha = np.arctan2(d[:, 1], d[:, 0])
+            spread = np.arccos(np.clip(k / np.where(dist > 0, dist, 1.0), -1, 1))
+            for sign in (1.0, -1.0):
+                cand = p0 + np.mod(phi0 - (alpha + sign * spread) + math.pi, 2 * math.pi) - math.pi
+                hit = ok & ~found & (cand >= p0 - 1e-15) & (cand <= p1 + 1e-15)
+                better = hit & (cand < pitch)
+                pitch = np.where(better, np.maximum(cand, p0), pitch)
+            found |= pitch <= p1 + 1e-15
+        reaches_flat = np.hypot(*(np.tile(ankle0, (len(hips), 1)) - hips).T) <= radius
+        return np.where(reaches_flat, 0.0, pitch)
+
+    def ankle_limit_pitch(self, hips: np.ndarray) -> np.ndarray:
+        """The least pitch >= 0 that holds θ5 at ``heel_off_theta5`` (0 while the flat foot is
+        below it). θ5 need not fall monotonically as the heel rises, so the first crossing is
+        bracketed on a 3° scan (one vectorised evaluation of every sample at every scan pitch) and
+        then bisected: the least root, which moves continuously."""
+        hips = np.asarray(hips, float)
+        pitch = np.zeros(len(hips))
+
+        def excess(p, h):
+            ankle = self._ankle(p)
+            th3, th4, _ = leg_ik(self.foot.body, h, ankle)
+            return ankle_angle(th3, th4, -p) - self.heel_off_theta5      # the sole turns by -p
+        need = np.flatnonzero(excess(np.zeros(len(hips)), hips) > 0)
+        if not need.size:
+            return pitch
+        h = hips[need]
+        scan = np.linspace(0.0, MAX_PITCH, 30)
+        values = excess(np.repeat(scan, len(h)), np.tile(h, (len(scan), 1))).reshape(len(scan), len(h))
+        below = values <= 0
+        first = np.where(below.any(axis=0), below.argmax(axis=0), len(scan) - 1)
+        lo, hi = scan[np.maximum(first - 1, 0)], scan[first]
+        for _ in range(24):   # 3° / 2^24: 3e-9 rad
+            mid = 0.5 * (lo + hi)
+            over = excess(mid, h) > 0
+            lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
+        pitch[need] = hi
+        return pitch
+
+    def _rocker_left(self, t: np.ndarray) -> np.ndarray:
+        """How much of the heel-strike rotation is left at ``t`` (1 at heel strike, 0 once flat)."""
+        if self.t_flat <= 0:
+            return np.zeros_like(t)
+        return 1 - smoothstep(t / self.t_flat)
+
+    def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
+        """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
+        t = np.asarray(t, float)
+        rocker = self.rocker_pitch * self._rocker_left(t)
+        single = self.reach_pitch(hips)
+        if self.single_t:
+            single = np.maximum(single, np.interp(t, self.single_t, self.single_pitch))
+        span = max(self.t_toe_off - self.t_step, 1e-12)
+        through = np.clip((t - self.t_step) / span, 0, 1)
+        push = self.pitch_ds_start + (self.pitch_toe_off - self.pitch_ds_start) * through
+        push = np.maximum(push, self.reach_pitch(hips, 1 - (1 - REACH_FRACTION) * through))
+        late = np.where(t >= self.t_step, push, np.where(t >= self.t_heel_off, single, 0.0))
+        return np.where(t < self.t_flat, rocker, late)
+
+    def frames(self, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:
+        """The leg at stance times ``t`` (n,) with the simulated hips ``hips`` (n, 2)."""
+        t, hips = np.asarray(t, float), np.asarray(hips, float)
+        pitch = self.pitch(t, hips)
+        pose = self.foot.pose(pitch, self.meta_off_theta6, self.rocker_theta6 * self._rocker_left(t))
+        body = self.foot.body
+        reach = np.hypot(*(pose["ankle"] - hips).T)
+        th3, th4, knee = leg_ik(body, hips, pose["ankle"])
+        period = np.where(pitch > self.meta_off_theta6, META_OFF, np.where(pitch > 0, HEEL_OFF, NORMAL))
+        return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
+                                th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
+                                np.maximum(reach - body.l1, 0.0))
+
+    # -- completing the rules -----------------------------------------------------------------
+    def _flat_triggers(self, hips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """With the foot flat: θ5 minus its limit (rad) and the hip-ankle distance minus the reach
+        (m, against the straight leg); the heel comes off where the first of them reaches zero."""
+        body, ankle = self.foot.body, np.tile(self.foot.ankle, (len(hips), 1))
+        th3, th4, _ = leg_ik(body, hips, ankle)
+        theta5 = ankle_angle(th3, th4, np.zeros(len(hips)))
+        return theta5 - self.heel_off_theta5, np.hypot(*(ankle - hips).T) - body.l1
+
+    def find_heel_off(self, t: np.ndarray, hips: np.ndarray) -> "StanceFoot":
+        """The heel-off time from the single-support samples ``t`` (the stance's nodes): the first
+        zero after the foot is flat of either trigger (linear between the samples around it), or the
+        other leg's heel strike if the heel stays down that long."""
+        t, hips = np.asarray(t, float), np.asarray(hips, float)
+        first = self.t_step
+        for g in self._flat_triggers(hips):
+            up = np.flatnonzero((g > 0) & (t >= self.t_flat))
+            if not up.size:
+                continue
+            k = up[0]
+            if k == 0 or t[k - 1] < self.t_flat or g[k - 1] > 0:
+                crossing = max(t[k - 1] if k else t[k], self.t_flat)
+            else:
+                crossing = t[k - 1] + (t[k] - t[k - 1]) * (-g[k - 1]) / (g[k] - g[k - 1])
+            first = min(first, float(crossing))
+        rule = np.maximum(self.ankle_limit_pitch(hips), self.reach_pitch(hips))
+        held = np.maximum.accumulate(np.where(t >= first, rule, 0.0))
+        return replace(self, t_heel_off=first, single_t=tuple(t), single_pitch=tuple(held))
+
+    def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float) -> "StanceFoot":
+        """The rules of the double support: the pitch starts where single support left it and runs
+        to ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
+        start = float(self.pitch(np.array([self.t_step - 1e-12]), np.atleast_2d(hip_at_other_heel_strike))[0])
+        return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=max(start, 0.0),
+                       pitch_toe_off=max(pitch_toe_off, start, 0.0))
+
+
+#: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at
+#: least this far behind its heel-strike angle θ3 (eq. 3). See :func:`toe_off_pitch`.
+MIN_SWING1_THIGH_TRAVEL = 0.15
+
+
+def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_wanted: float,
+                  theta3_target: float) -> float:
+    """The foot's pitch at toe-off: ``pitch_wanted`` (the ``toe_off_foot_pitch`` attribute), at
+    least where the double support starts and the leg's reach, lowered if needed so that the thigh
+    is not ahead of ``theta3_target + MIN_SWING1_THIGH_TRAVEL``.
+
+    Swing1 carries the thigh forward to its heel-strike angle while the ankle travels forward along
+    curve P (§4.3). Raising the heel with the hip still above the foot, as in the first step from
+    standing, bends the knee forwards and puts the thigh ahead of that angle; swing1 would then
+    have to swing it back while the ankle moves forward, through the full extension where the
+    ankle-on-curve-P constraint is singular. A person starting to walk raises the heel only as far
+    as the hip has moved over the foot; so does this rule. In steady walking the attribute holds."""
+    hips = np.atleast_2d(np.asarray(hip, float))
+    reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
+    bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
+
+    def thigh_ahead(pitch: float) -> float:
+        return float(leg_ik(foot.foot.body, hips, foot._ankle(np.array([pitch])))[0][0]) - bound
+    wanted = max(pitch_wanted, pitch_start, reach)
+    if thigh_ahead(wanted) >= 0:
+        return wanted
+    lo = max(pitch_start, reach)
+    if thigh_ahead(lo) <= 0:
+        return lo
+    hi = wanted   # the thigh angle falls monotonically as the heel rises (the ankle nears the hip)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if thigh_ahead(mid) > 0 else (lo, mid)
+    return hi
+
+
+def hind_foot_at_rest(body: Body, attrs, ankle_x: float) -> StanceFoot:
+    """The hind foot of a walk's first step, with no stance behind it (a walking start or a start
+    from rest): flat until the double support, which then pitches it from its reach to toe-off."""
+    return replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0)

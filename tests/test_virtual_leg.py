@@ -1,0 +1,118 @@
+"""The virtual leg (§4.2, figure 6; kinematics/virtual_leg.py): a human leg on the telescopic
+stance leg, through its three foot periods, checked on real walks."""
+import math
+
+import numpy as np
+import pytest
+
+from klaw_ocp.dynamics import foot_points
+from klaw_ocp.kinematics.virtual_leg import HEEL_OFF, META_OFF, NORMAL, FlatFoot
+from klaw_ocp.walk import simulate_walk
+
+METHODS = ("multiple-shooting", "plain-shooting")
+WALKS = {"5kmh": {"speed": 5.0, "steps": 4}, "2kmh-rest": {"speed": 2.0, "steps": 3, "start_from_rest": True},
+         "8kmh": {"speed": 8.0, "steps": 3}}
+
+
+@pytest.fixture(scope="module", params=[(m, w) for m in METHODS for w in WALKS],
+                ids=[f"{m}-{w}" for m in METHODS for w in WALKS])
+def legs(request):
+    method, name = request.param
+    walk = simulate_walk({"name": "v", "body": {"height": 1.8, "mass": 80}, "walk": WALKS[name]}, method=method)
+    assert walk.status == "ok"
+    frames = [step.stance_leg_frames() for step in walk.steps if step.stance_leg_frames is not None]
+    return walk, [f for f in frames if f is not None]
+
+
+def _distance(a, b):
+    return np.hypot(*(a - b).T)
+
+
+def test_the_leg_reaches_the_simulated_hip_with_its_own_segments(legs):
+    """Forward kinematics from the ankle through θ4 and θ3 reproduces the simulated hip to 1e-9 m;
+    thigh and shank keep l3 and l4; the leg never has to reach beyond its length."""
+    walk, frames = legs
+    body = walk.spec.body
+    assert frames
+    for f in frames:
+        phi = f.theta3 + f.theta4
+        knee = f.ankle + body.l4 * np.column_stack([np.sin(phi), np.cos(phi)])
+        hip = knee + body.l3 * np.column_stack([np.sin(f.theta3), np.cos(f.theta3)])
+        assert np.abs(hip - f.hip).max() <= 1e-9
+        assert np.abs(_distance(f.knee, f.hip) - body.l3).max() <= 1e-12
+        assert np.abs(_distance(f.ankle, f.knee) - body.l4).max() <= 1e-12
+        assert f.overreach.max() <= 1e-12 and np.all(f.theta4 >= 0)
+
+
+def test_each_period_turns_the_foot_about_its_pivot(legs):
+    """Normal: about the heel until flat, then flat; heel-off: about the metatarsal head with the
+    toe flat; meta-off: about the toe tip. The pivot stays put to 1e-9 m; the periods come in that
+    order and each stance has all three."""
+    walk, frames = legs
+    body = walk.spec.body
+    for f in frames:
+        order = [p for i, p in enumerate(f.period) if i == 0 or p != f.period[i - 1]]
+        assert order == [NORMAL, HEEL_OFF, META_OFF]
+        rocker = (f.period == NORMAL) & (f.pitch < 0)
+        flat = (f.period == NORMAL) & (f.pitch == 0)
+        standing = f.t[0] == 0 and f.pitch[0] == 0      # the first stance of a start from rest
+        assert (standing or rocker.sum() >= 2) and flat.sum() >= 2
+        for mask, point in ((rocker, f.heel), (flat, f.ankle), (flat, f.heel), (f.period == HEEL_OFF, f.metatarsal),
+                            (f.period == HEEL_OFF, f.toe), (f.period == META_OFF, f.toe)):
+            if mask.any():     # the standing start has no heel rocker
+                assert np.abs(point[mask] - point[mask][0]).max() <= 1e-9
+        assert np.abs(f.heel[rocker | flat, 1]).max() <= 1e-12           # the heel on the ground
+        assert np.abs(f.toe[f.period != NORMAL, 1]).max() <= 1e-12      # the toe on the ground
+        assert np.all(np.diff(f.pitch[f.period != NORMAL]) >= -1e-12)    # the heel never comes down again
+        # the foot is rigid
+        for a, b in (("heel", "ankle"), ("ankle", "metatarsal"), ("heel", "metatarsal")):
+            d = _distance(getattr(f, a), getattr(f, b))
+            assert np.ptp(d) <= 1e-12, (a, b)
+        assert min(f.heel[:, 1].min(), f.toe[:, 1].min(), f.metatarsal[:, 1].min()) >= -1e-12
+        assert _distance(f.ankle, f.metatarsal)[0] == pytest.approx(body.l12, abs=1e-12)
+
+
+def test_the_angles_are_the_foot_models_angles(legs):
+    """θ5 and θ6 as dynamics.foot_points defines them: the foot it builds from the ankle, the
+    shank angle, θ5 and θ6 is the virtual leg's foot, at every sample."""
+    walk, frames = legs
+    body = walk.spec.body
+    for f in frames:
+        for i in range(len(f.t)):
+            pts = foot_points(body, f.ankle[i], f.theta3[i] + f.theta4[i], f.theta5[i], f.theta6[i])
+            for name in ("heel", "metatarsal", "toe"):
+                assert pts[name] == pytest.approx(getattr(f, name)[i], abs=1e-9), (i, name)
+
+
+def test_heel_strike_and_heel_off_follow_the_attributes(legs):
+    """The leg lands straight on its heel with the foot at θ5 = theta5_impact; the heel comes off
+    where θ5 reaches heel_off_theta5 (or the flat foot is out of reach); meta-off where θ6 reaches
+    meta_off_theta6, which it then keeps."""
+    walk, frames = legs
+    attrs = walk.spec.attributes
+    for f in frames:
+        if f.pitch[0] == 0:
+            continue      # a start from rest: the foot stands flat
+        assert f.theta4[0] == pytest.approx(0.0, abs=1e-6)
+        # eq. 3 built the landing with Table B-1's l11; the foot's heel-ankle is sqrt(l8² + l9²),
+        # equal to its 4 digits: 0.011° at 1.8 m
+        assert math.degrees(f.theta5[0]) == pytest.approx(attrs.theta5_impact, abs=0.02)
+        flat = (f.period == NORMAL) & (f.pitch == 0)
+        assert np.all(np.degrees(f.theta5[flat]) <= attrs.heel_off_theta5 + 1e-6)
+        meta = f.period == META_OFF
+        assert np.degrees(f.theta6[meta]) == pytest.approx(attrs.meta_off_theta6, abs=1e-9)
+        heel_off = f.period == HEEL_OFF
+        assert np.all(np.degrees(f.theta6[heel_off]) <= attrs.meta_off_theta6 + 1e-9)
+
+
+def test_a_flat_foot_has_its_table_b1_points():
+    foot = FlatFoot(_body(), 0.3)
+    pose = foot.pose(np.zeros(1), math.radians(30))
+    assert pose["ankle"][0] == pytest.approx([0.3, foot.body.l9])
+    assert pose["heel"][0] == pytest.approx([0.3 - foot.body.l8, 0.0])
+    assert pose["toe"][0, 1] == 0.0 and pose["metatarsal"][0, 1] == 0.0
+
+
+def _body():
+    from klaw_ocp.body import Body
+    return Body(1.8, 80)
