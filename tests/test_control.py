@@ -1,4 +1,4 @@
-"""Unit tests of ``klaw_ocp.control``: the torque shapes, curve P, the hind leg, the gains.
+"""Unit tests of ``klaw_ocp.control``: the torque shapes, curve P, the swing1 end posture, the gains.
 
 Walks exercise these only as a whole; here each is held against its written definition, with
 values worked out by hand or recomputed with independent geometry:
@@ -7,7 +7,7 @@ values worked out by hand or recomputed with independent geometry:
   spring-damper with its position actuator, and how the stance and swing laws combine them;
 - curve P (§4.3): the five conditions y(0) = a0, y(C) = a_max, y'(C) = 0, y(D) = a_min,
   y'(D) = 0, and the swing1 knee law that keeps the ankle on it;
-- the hind leg's double support (§3, §4.2): hip, foot and segment lengths rebuilt from the angles;
+- the swing1 end posture (§4.3): the toe directly under the knee, clear of the ground;
 - the spring and damping constants, k = m_eff (2 pi f)^2 and d = 2 zeta m_eff (2 pi f).
 """
 import math
@@ -243,114 +243,7 @@ def test_swing1_knee_law_keeps_the_ankle_on_curve_p():
     assert error_rate == pytest.approx(-50.0 * error, rel=1e-9)
 
 
-# -- hind leg (double support) ------------------------------------------------------------------
-
-def pitched_foot(body, metatarsal_x, pitch):
-    """Ankle and heel of a foot standing on its metatarsal head, heel raised by ``pitch``."""
-    reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)         # flat foot: head is (reach, -l9) from the ankle
-    rot = lambda v: np.array([math.cos(pitch) * v[0] + math.sin(pitch) * v[1],
-                              -math.sin(pitch) * v[0] + math.cos(pitch) * v[1]])   # clockwise by pitch
-    head = np.array([metatarsal_x, 0.0])
-    return head - rot((reach, -body.l9)), head + rot((-reach - body.l8, 0.0))
-
-
-def test_metatarsal_offset_puts_the_head_l12_from_the_flat_ankle():
-    off = ds.metatarsal_offset(BODY)
-    assert math.hypot(off, BODY.l9) == pytest.approx(BODY.l12)
-    assert ds.hind_ankle(BODY, 0.4, 0.0) == pytest.approx([0.4 - off, BODY.l9])
-    ankle, heel = pitched_foot(BODY, 0.4, 0.5)
-    assert ds.hind_ankle(BODY, 0.4, 0.5) == pytest.approx(ankle, abs=1e-14)
-    assert heel[1] == pytest.approx((BODY.l8 + off) * math.sin(0.5))   # heel-off lifts the heel
-
-
-@FAST
-@given(shank=st.floats(-1.0, 1.0), pitch=st.floats(0.0, 1.4))
-def test_ankle_angle_is_the_foot_angle_that_stands_the_foot_on_its_head(shank, pitch):
-    theta5 = ds.ankle_angle(shank, pitch)
-    assert theta5 == pytest.approx((math.pi / 2 + shank - pitch) % (2 * math.pi))
-    # the foot model, given this theta5 and a toe flat on the ground, lands head and toe at y = 0
-    ankle = ds.hind_ankle(BODY, 0.3, pitch)
-    _, head, toe = foot_points_float(*ankle, shank, theta5, pitch, BODY.l8, BODY.l9, BODY.l12, BODY.l13)
-    assert head == pytest.approx((0.3, 0.0), abs=1e-12)
-    assert toe == pytest.approx((0.3 + BODY.l13, 0.0), abs=1e-12)
-
-
-def check_leg(body, hip, metatarsal_x, leg):
-    """Rebuild the leg from its angles: thigh l3, shank l4, hip where asked, foot on its head."""
-    knee = hip - body.l3 * unit(leg.theta3)
-    ankle = knee - body.l4 * unit(leg.theta3 + leg.theta4)
-    assert ankle == pytest.approx(leg.ankle, abs=1e-9)
-    assert ankle == pytest.approx(pitched_foot(body, metatarsal_x, leg.pitch)[0], abs=1e-9)
-    assert leg.theta4 > 0                                       # knee flexed, not hyperextended
-    # knee forward of the hip-ankle line (cross product of hip->ankle and hip->knee)
-    a, k = ankle - hip, knee - hip
-    assert a[0] * k[1] - a[1] * k[0] > 0
-
-
-@pytest.mark.parametrize("height, mass", [(1.4, 40), (1.8, 80), (2.1, 150)])
-def test_hind_leg_pitch_interpolates_over_the_double_support(height, mass):
-    body = Body(height, mass)
-    hip = np.array([0.05 * height, 0.47 * height])       # hip nearly over the head: the flat foot reaches
-    assert ds.reach_pitch(body, hip, 0.0) == 0.0
-    p0, p_to = 0.1, 0.6
-    for t, expected in ((0.0, p0), (0.03, p0 + 0.25 * (p_to - p0)), (0.06, 0.5 * (p0 + p_to)),
-                        (0.12, p_to), (0.2, p_to)):       # held at the toe-off pitch after t_ds
-        leg = ds.hind_leg(body, hip, 0.0, t, 0.12, p0, p_to)
-        assert leg.pitch == pytest.approx(expected)
-        check_leg(body, hip, 0.0, leg)
-
-
-@FAST
-@given(dist=st.floats(0.75, 1.1), lean=st.floats(-0.1, 0.7), height=st.floats(1.4, 2.1),
-       t=st.floats(0.0, 0.15))
-def test_hind_leg_reaches_any_hip_of_a_double_support(dist, lean, height, t):
-    body = Body(height, 70.0)
-    mt_x = 0.5
-    hip = np.array([mt_x, 0.0]) + dist * body.l1 * unit(lean)
-    leg = ds.hind_leg(body, hip, mt_x, t, 0.1, 0.0, math.radians(45))
-    check_leg(body, hip, mt_x, leg)
-    interpolated = math.radians(45) * min(1.0, t / 0.1)
-    assert leg.pitch >= interpolated - 1e-12                 # raised only, never lowered
-    if leg.pitch > interpolated + 1e-9:                      # raised exactly to the reach pitch
-        assert np.linalg.norm(leg.ankle - hip) == pytest.approx(body.l1 * ds.REACH_FRACTION, rel=1e-9)
-
-
-@FAST
-@given(dist=st.floats(0.9, 1.15), lean=st.floats(0.0, 0.7))
-def test_reach_pitch_is_the_smallest_pitch_that_reaches(dist, lean):
-    radius = BODY.l1 * ds.REACH_FRACTION
-    hip = dist * BODY.l1 * unit(lean)
-    p = ds.reach_pitch(BODY, hip, 0.0)
-    gap = lambda q: np.linalg.norm(pitched_foot(BODY, 0.0, q)[0] - hip) - radius
-    if p == 0.0:
-        assert gap(0.0) <= 0
-    else:
-        assert 0 < p < math.radians(89)
-        assert gap(p) == pytest.approx(0.0, abs=1e-10)
-        assert gap(p - 1e-6) > 0                             # any less pitch leaves the ankle out of reach
-
-
-def test_reach_pitch_bends_the_knee_about_five_degrees():
-    leg = ds.hind_leg(BODY, np.array([0.45, 0.9]), 0.0, 0.0, 0.1, 0.0, 0.0)
-    assert leg.pitch > 0
-    assert math.degrees(leg.theta4) == pytest.approx(5.1, abs=0.1)
-
-
-def test_toe_off_pitch_keeps_the_attribute_in_steady_walking():
-    hip, wanted = np.array([0.35, 0.9]), math.radians(ATTRS.toe_off_foot_pitch)
-    start = ds.reach_pitch(BODY, hip, 0.0)
-    assert ds.toe_off_pitch(BODY, hip, 0.0, start, wanted, -0.35) == wanted
-
-
-def test_toe_off_pitch_from_standing_stops_the_thigh_at_its_bound():
-    hip, wanted, theta3_hs = np.array([0.0, 0.9]), math.radians(45), -0.3
-    pitch = ds.toe_off_pitch(BODY, hip, 0.0, 0.0, wanted, theta3_hs)
-    assert 0.0 < pitch < wanted                              # heel raised, but less than asked
-    leg = ds.hind_leg(BODY, hip, 0.0, 0.1, 0.1, 0.0, pitch)
-    assert leg.theta3 == pytest.approx(theta3_hs + 0.15, abs=1e-9)   # 0.15 rad behind (docs/paper-map.md)
-    # a thigh already ahead of its bound at the lowest pitch: the heel stays where it starts
-    assert ds.toe_off_pitch(BODY, hip, 0.0, 0.05, wanted, 0.0) == 0.05
-
+# -- swing1 end posture ------------------------------------------------------------------------
 
 @pytest.mark.parametrize("hip_y, theta3, dorsiflexed", [(0.93, -0.3, True), (0.88, -0.4, True),
                                                        (0.93, -0.8, False), (1.0, -0.5, False)])
