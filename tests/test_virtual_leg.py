@@ -116,3 +116,31 @@ def test_a_flat_foot_has_its_table_b1_points():
 def _body():
     from klaw_ocp.body import Body
     return Body(1.8, 80)
+
+
+@pytest.mark.parametrize("walk_kind", ["5kmh", "2kmh-rest"])
+def test_events_have_every_heel_strike_and_toe_off_of_both_legs(walk_kind):
+    """events.csv's rows (results.foot_events): heel strikes alternate, the right leg first; each
+    toe-off is t_ds after the other leg's heel strike; every stance has its foot-flat and heel-off
+    between its heel strike and its toe-off; times in order."""
+    from klaw_ocp.io.writers import events_csv
+    from klaw_ocp.results import walk_summary
+    walk = simulate_walk({"name": "e", "body": {"height": 1.8, "mass": 80}, "walk": WALKS[walk_kind]})
+    rows = [line.split(",") for line in events_csv(walk_summary(walk)).splitlines()]
+    assert rows[0] == ["time", "side", "event"]
+    events = [(float(t), side, name) for t, side, name in rows[1:]]
+    assert [t for t, _, _ in events] == sorted(t for t, _, _ in events)
+    strikes = [(t, side) for t, side, name in events if name == "heel_strike"]
+    rest = walk.spec.start_from_rest
+    assert [side for _, side in strikes] == [("right", "left")[(i + rest) % 2] for i in range(len(strikes))]
+    assert len(strikes) == len(walk.steps) - rest
+    for step in walk.steps:
+        toe_off = [t for t, side, name in events if name == "toe_off"
+                   and abs(t - step.t_start - step.plan.timings.t_ds) < 1e-12]
+        assert len(toe_off) == 1
+    for step in walk.steps[:-1]:         # stances that end inside the walk
+        side = "right" if step.index % 2 == 0 else "left"
+        t_end = step.t_start + step.plan.timings.t_step + walk.steps[step.index + 1].plan.timings.t_ds
+        inside = [name for t, s, name in events if s == side and step.t_start - 1e-12 <= t <= t_end + 1e-12]
+        assert inside[-1] == "toe_off" and "foot_flat" in inside and "heel_off" in inside
+        assert inside.index("foot_flat") < inside.index("heel_off") < inside.index("toe_off")

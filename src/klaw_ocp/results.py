@@ -118,6 +118,29 @@ def hip_dip(body, stance) -> float:
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 
+def foot_events(walk) -> list[dict]:
+    """Every foot event of the walk, in time order: ``time`` (s, walk time), ``side`` (right or
+    left) and ``event``: ``heel_strike``, ``foot_flat``, ``heel_off`` (the virtual leg's periods,
+    §4.2) and ``toe_off`` (the end of the double support, t_ds after the other leg's heel strike).
+    A walk from rest has no heel strike of its first stance leg, which stands flat from the start."""
+    events = []
+    for step in walk.steps:
+        t0, side = step.t_start, stance_leg(step.index)
+        other = "left" if side == "right" else "right"
+        events.append({"time": t0 + step.plan.timings.t_ds, "side": other, "event": "toe_off"})
+        foot = step.stance_foot if step.stance_foot is not None else step.stance_rules
+        if foot is None:
+            continue
+        standing = foot.t_flat == 0 and foot.rocker_pitch == 0
+        if not standing:
+            events.append({"time": t0, "side": side, "event": "heel_strike"})
+        events.append({"time": t0 + foot.t_flat, "side": side, "event": "foot_flat"})
+        if foot.t_heel_off < foot.t_step + 1e-12:
+            events.append({"time": t0 + foot.t_heel_off, "side": side, "event": "heel_off"})
+    order = {"heel_strike": 0, "foot_flat": 1, "heel_off": 2, "toe_off": 3}
+    return sorted(events, key=lambda e: (e["time"], order[e["event"]]))
+
+
 def walk_summary(walk, table: dict | None = None) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results
     (``table``: the walk's :func:`walk_table`, when the caller has it already)."""
@@ -156,4 +179,5 @@ def walk_summary(walk, table: dict | None = None) -> dict:
         "mean_hip_speed_kmh": (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
                                if hip is not None and hip["t"][-1] > hip["t"][0] else None),
         "steps": steps,
+        "events": foot_events(walk),
     }

@@ -160,8 +160,9 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
                 walk.steps[-1].complete_stance_leg(result)
             walk.steps.append(result)
             inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
+            result.stance_rules = stance_foot(spec, result)
             if inp is not None:
-                inp.hind_foot = stance_foot(spec, result)
+                inp.hind_foot = result.stance_rules
     except ConvergenceError as err:
         walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
         err.partial = walk

@@ -76,6 +76,8 @@ class StepResult:
     #: (leg stance time, world hips)
     hind_foot: object = None
     hind_samples: tuple = ()
+    #: this step's stance leg's rules as its own stance left them (heel strike, foot flat, heel-off)
+    stance_rules: object = None
     #: this step's stance leg, completed by the next step's double support (:meth:`complete_stance_leg`)
     stance_foot: object = None
     stance_samples: tuple = ()

@@ -2,6 +2,7 @@
 
 - ``summary.json``: :func:`klaw_ocp.results.walk_summary`.
 - ``dynamics.csv``: :func:`klaw_ocp.results.walk_table`, one row per time sample.
+- ``events.csv``: :func:`events_csv`, the foot events (heel strike, foot flat, heel-off, toe-off).
 """
 from __future__ import annotations
 
@@ -74,10 +75,21 @@ def render_run(run) -> dict:
     return _render(run.summary, dynamics_csv(None, run.table))
 
 
+def events_csv(summary: dict) -> str:
+    """``events.csv``: one row per foot event (time s, side, event), from the summary's ``events``
+    (:func:`klaw_ocp.results.foot_events`); only the header for a result written before them."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(("time", "side", "event"))
+    writer.writerows((repr(float(e["time"])), e["side"], e["event"]) for e in summary.get("events", []))
+    return buffer.getvalue()
+
+
 def _render(summary: dict, table_csv: str) -> dict:
     text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
     return {"dynamics": ("dynamics.csv", table_csv.encode("utf-8")),
-            "summary": ("summary.json", text.encode("utf-8"))}
+            "summary": ("summary.json", text.encode("utf-8")),
+            "events": ("events.csv", events_csv(summary).encode("utf-8"))}
 
 
 def write_rendered(files: dict, out_dir) -> dict:
