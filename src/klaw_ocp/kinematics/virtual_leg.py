@@ -290,17 +290,22 @@ class StanceFoot:
 
     def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
         """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
-        t = np.asarray(t, float)
-        rocker = self.rocker_pitch * self._rocker_left(t)
-        single = self.reach_pitch(hips)
-        if self.single_t:
-            single = np.maximum(single, np.interp(t, self.single_t, self.single_pitch))
-        span = max(self.t_toe_off - self.t_step, 1e-12)
-        through = np.clip((t - self.t_step) / span, 0, 1)
-        push = self.pitch_ds_start + (self.pitch_toe_off - self.pitch_ds_start) * through
-        push = np.maximum(push, self.reach_pitch(hips, 1 - (1 - REACH_FRACTION) * through))
-        late = np.where(t >= self.t_step, push, np.where(t >= self.t_heel_off, single, 0.0))
-        return np.where(t < self.t_flat, rocker, late)
+        t, hips = np.asarray(t, float), np.asarray(hips, float)
+        pitch = np.zeros(len(t))
+        rocker = t < self.t_flat
+        pitch[rocker] = self.rocker_pitch * self._rocker_left(t[rocker])
+        # each rule only where it applies: the reach searches are most of the leg's cost
+        single = ~rocker & (t >= self.t_heel_off) & (t < self.t_step)
+        if single.any():
+            pitch[single] = self.reach_pitch(hips[single])
+            if self.single_t:
+                pitch[single] = np.maximum(pitch[single], np.interp(t[single], self.single_t, self.single_pitch))
+        push = ~rocker & (t >= self.t_step)
+        if push.any():
+            through = np.clip((t[push] - self.t_step) / max(self.t_toe_off - self.t_step, 1e-12), 0, 1)
+            linear = self.pitch_ds_start + (self.pitch_toe_off - self.pitch_ds_start) * through
+            pitch[push] = np.maximum(linear, self.reach_pitch(hips[push], 1 - (1 - REACH_FRACTION) * through))
+        return pitch
 
     def frames(self, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:
         """The leg at stance times ``t`` (n,) with the simulated hips ``hips`` (n, 2)."""
@@ -340,8 +345,11 @@ class StanceFoot:
             else:
                 crossing = t[k - 1] + (t[k] - t[k - 1]) * (-g[k - 1]) / (g[k] - g[k - 1])
             first = min(first, float(crossing))
-        rule = np.maximum(self.ankle_limit_pitch(hips), self.reach_pitch(hips))
-        held = np.maximum.accumulate(np.where(t >= first, rule, 0.0))
+        after = t >= first
+        rule = np.zeros(len(t))
+        if after.any():     # the searches only where the heel is off
+            rule[after] = np.maximum(self.ankle_limit_pitch(hips[after]), self.reach_pitch(hips[after]))
+        held = np.maximum.accumulate(rule)
         return replace(self, t_heel_off=first, single_t=tuple(t), single_pitch=tuple(held))
 
     def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float) -> "StanceFoot":
