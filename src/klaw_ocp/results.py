@@ -128,15 +128,13 @@ def foot_events(walk) -> list[dict]:
         t0, side = step.t_start, stance_leg(step.index)
         other = "left" if side == "right" else "right"
         events.append({"time": t0 + step.plan.timings.t_ds, "side": other, "event": "toe_off"})
-        foot = step.stance_foot if step.stance_foot is not None else step.stance_rules
+        foot = step.stance_foot
         if foot is None:
             continue
-        standing = foot.t_flat == 0 and foot.rocker_pitch == 0
-        if not standing:
+        if not foot.starts_standing:
             events.append({"time": t0, "side": side, "event": "heel_strike"})
         events.append({"time": t0 + foot.t_flat, "side": side, "event": "foot_flat"})
-        if foot.t_heel_off < foot.t_step + 1e-12:
-            events.append({"time": t0 + foot.t_heel_off, "side": side, "event": "heel_off"})
+        events.append({"time": t0 + foot.t_heel_off, "side": side, "event": "heel_off"})
     order = {"heel_strike": 0, "foot_flat": 1, "heel_off": 2, "toe_off": 3}
     return sorted(events, key=lambda e: (e["time"], order[e["event"]]))
 

@@ -160,9 +160,9 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
                 walk.steps[-1].complete_stance_leg(result)
             walk.steps.append(result)
             inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
-            result.stance_rules = stance_foot(spec, result)
+            result.stance_foot = stance_leg_rules(spec, result)
             if inp is not None:
-                inp.hind_foot = result.stance_rules
+                inp.hind_foot = result.stance_foot
     except ConvergenceError as err:
         walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
         err.partial = walk
@@ -192,7 +192,7 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion)
 
 
-def stance_foot(spec: WalkSpec, result: StepResult) -> StanceFoot:
+def stance_leg_rules(spec: WalkSpec, result: StepResult) -> StanceFoot:
     """The virtual leg's rules for the stance leg of ``result`` (§4.2): its heel-strike foot from
     the first hip (flat for the first step from rest), its heel-off from the stance's hips; the next
     step's double support completes it."""

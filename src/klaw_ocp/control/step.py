@@ -34,15 +34,6 @@ from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
 
-@dataclass(frozen=True)
-class _Leg:
-    """The hind leg at toe-off: thigh and knee angles (swing-model convention), foot pitch, ankle."""
-    theta3: float
-    theta4: float
-    pitch: float
-    ankle: np.ndarray
-
-
 @dataclass
 class StepInput:
     """What a step needs besides its plan: where it starts and how the body arrives there."""
@@ -76,9 +67,9 @@ class StepResult:
     #: (leg stance time, world hips)
     hind_foot: object = None
     hind_samples: tuple = ()
-    #: this step's stance leg's rules as its own stance left them (heel strike, foot flat, heel-off)
-    stance_rules: object = None
-    #: this step's stance leg, completed by the next step's double support (:meth:`complete_stance_leg`)
+    #: this step's stance leg (kinematics.virtual_leg.StanceFoot): the rules its own stance fixed
+    #: (heel strike, foot flat, heel-off), then completed by the next step's double support
+    #: (:meth:`complete_stance_leg`, whose samples go to ``stance_samples``)
     stance_foot: object = None
     stance_samples: tuple = ()
     #: the world hip at every stance node (m)
@@ -93,7 +84,7 @@ class StepResult:
         """This step's stance leg as a human leg (kinematics.virtual_leg.VirtualLegFrames) from its
         heel strike to its toe-off, at the stance's nodes and the next double support's; None until
         the next step has completed it."""
-        if self.stance_foot is None:
+        if self.stance_foot is None or not self.stance_foot.complete:
             return None
         t_after, hips_after = self.stance_samples
         t = np.concatenate([self.subphase("stance").t, t_after[1:]])
@@ -222,8 +213,8 @@ class StepController:
         x_to, hip_to, hip_vel_to = stance.states[k_to], hips[k_to], hip_vels[k_to]
         hind = inp.hind_foot
         t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
-        start = max(float(hind.pitch(np.array([t0 - 1e-12]), hips[:1])[0]), 0.0) if t0 > 0 else 0.0
-        pitch_to = toe_off_pitch(hind, hip_to, start, math.radians(a.toe_off_foot_pitch), con.theta3)
+        pitch_to = toe_off_pitch(hind, hip_to, hind.pitch_at_other_heel_strike(hips[0]),
+                                 math.radians(a.toe_off_foot_pitch), con.theta3)
         hind = hind.with_double_support(hips[0], t_to, pitch_to)
         ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
         legs = hind.frames(t0 + stance.t[ds_nodes], hips[ds_nodes])
@@ -234,7 +225,7 @@ class StepController:
         # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
         window = TOE_OFF_RATE_WINDOW * t_to
         ends = hind.frames(t0 + np.array([t_to, t_to - window]), np.array([hip_to, hip_to - window * hip_vel_to]))
-        leg_to = _Leg(float(ends.theta3[0]), float(ends.theta4[0]), float(ends.pitch[0]), ends.ankle[0])
+        th3_to, th4_to, ankle_to = float(ends.theta3[0]), float(ends.theta4[0]), ends.ankle[0]
         th3d_to = float(ends.theta3[0] - ends.theta3[1]) / window
 
         # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
@@ -244,7 +235,7 @@ class StepController:
         knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
         # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
         ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 0.01 * b.l1)
-        a0, x0 = leg_to.ankle[1], leg_to.ankle[0]
+        a0, x0 = ankle_to[1], ankle_to[0]
         a_min = ankle_t1[1]
         d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
         a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
@@ -270,7 +261,7 @@ class StepController:
         mode1 = NO_LOCK_EVENTS if at_rest else lock_mode(stance.events, stance.t[k_to])
         c1 = lock_context(c, mode1)
         s1 = self._solve(index, SubphaseProblem(
-            specs["swing1"], np.concatenate([x_to, [leg_to.theta3, leg_to.theta4, th3d_to]]),
+            specs["swing1"], np.concatenate([x_to, [th3_to, th4_to, th3d_to]]),
             time_grid(t_to, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 1), self.scales["swing1"],
             mode=mode1))
         x_end1 = s1.final_state
