@@ -21,6 +21,7 @@ from klaw_ocp.control.stance_law import STANCE_CONTEXT
 from klaw_ocp.control.step import StepController
 from klaw_ocp.control.swing_law import SWING_CONTEXT
 from klaw_ocp.dynamics import foot_points_float
+from klaw_ocp.kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from klaw_ocp.solvers.problem import mapped
 from klaw_ocp.walk import simulate_walk, walk_spec
 
@@ -163,12 +164,10 @@ def world_hip_velocities(states: np.ndarray) -> np.ndarray:
 
 
 def swing_foot_angles(context: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """θ5, θ6 of the swing foot at times ``t``, as the swing's context defines them: held until
-    ``foot_from_time`` (t2), then linear to the heel-strike attributes at the end of the swing."""
-    n = {name: float(context[i]) for name, i in SWING_CONTEXT.index.items()}
-    s = np.maximum(0.0, (t - n["foot_from_time"]) / (n["swing_end_time"] - n["foot_from_time"]))
-    return (n["theta5_from"] + s * (n["theta5_impact"] - n["theta5_from"]),
-            n["theta6_from"] + s * (n["theta6_impact"] - n["theta6_from"]))
+    """θ5, θ6 of the swing foot at times ``t``, from the schedule the swing's context carries
+    (kinematics/swing_foot.py, the formula the swing's path functions use)."""
+    values = {name: float(context[SWING_CONTEXT.index[f"foot_{name}"]]) for name in SCHEDULE_FIELDS}
+    return SwingFoot(**values).angles(t)
 
 
 def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -24,6 +24,7 @@ MIN_CURVE_P_TRAVEL = 0.4
 #: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
 TOE_OFF_RATE_WINDOW = 0.1
 
+from ..kinematics.swing_foot import SwingFoot
 from ..kinematics.virtual_leg import toe_off_pitch
 from .double_support import curve_p_coefficients, swing1_end_posture
 from .gains import ControlGains
@@ -74,6 +75,8 @@ class StepResult:
     stance_samples: tuple = ()
     #: the world hip at every stance node (m)
     stance_hips: np.ndarray = None
+    #: the swing foot's angle schedule (kinematics.swing_foot.SwingFoot), step-local times
+    swing_foot: object = None
 
     def complete_stance_leg(self, following: "StepResult") -> None:
         """The next step's double support finished this stance leg: keep its rules and samples."""
@@ -241,13 +244,13 @@ class StepController:
         a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                     max(a0, a_min) + 0.01 * b.l1)
         coeffs = curve_p_coefficients(a0, a_max, a_min, a.swing_peak_position * d_travel, d_travel)
+        swing_foot = SwingFoot(t_to, t1, t2, t.t_step, theta5_to, theta6_to, theta5_t1, theta5_hs, theta6_hs)
 
         ctx = dict(sctx)
         ctx.update({f"stance_{k}": stance.parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
         ctx.update(origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
-                   foot_from_time=t2, theta5_from=theta5_t1, theta5_impact=theta5_hs, theta6_from=theta6_hs,
-                   theta6_impact=theta6_hs, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
+                   **{f"foot_{k}": v for k, v in asdict(swing_foot).items()}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
                    tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
                    swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
                    **{f"P{i}": coeffs[i] for i in range(5)})
@@ -295,4 +298,5 @@ class StepController:
                           final_stance_state=stance.final_state, heel_clearance_min=float(heel.min()) if heel.size else 0.0,
                           plan=plan, notes=notes,
                           hip_reference={"y_start": inp.y_start, "y_end": sctx["y_end"], "excursion": inp.excursion},
-                          hind_foot=hind, hind_samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]), stance_hips=hips)
+                          hind_foot=hind, hind_samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]), stance_hips=hips,
+                          swing_foot=swing_foot)

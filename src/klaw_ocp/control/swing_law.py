@@ -27,18 +27,20 @@ import casadi as ca
 from ..dynamics.kinematics import foot_points_sx
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from ..dynamics.swing import swing_accelerations_sx, swing_points
+from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .layout import VectorLayout
 from .stance_law import STANCE_CONTEXT, STANCE_PARAMETERS, body_vector, stance_forces
 from .torques import decaying_exponential, spring_damper
 
+#: the swing foot's schedule (kinematics/swing_foot.py), under these names in the swing context
+FOOT_CONTEXT = tuple(f"foot_{name}" for name in SCHEDULE_FIELDS)
 #: the solved stance parameters, under these names in the swing context
 STANCE_PARAMETERS_IN_SWING = tuple(f"stance_{name}" for name in STANCE_PARAMETERS.names)
 SWING_CONTEXT = VectorLayout(
     STANCE_CONTEXT,
     STANCE_PARAMETERS_IN_SWING,
     ["origin_x", "origin_y", "l8", "l9", "l12", "l13",
-     "toe_off_time", "swing_end_time", "foot_from_time", "theta5_from", "theta5_impact", "theta6_from",
-     "theta6_impact",
+     "toe_off_time", "swing_end_time", *FOOT_CONTEXT,
      "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
      "swing2_start", "tau4"],
 )
@@ -65,13 +67,11 @@ def stance_part(xs, t, c):
 
 
 def foot_angles(t, c):
-    """theta5, theta6: held at their t1 values until ``foot_from_time`` (t2), then interpolated
-    linearly to their heel-strike values (§4.3). Holding them while the knee extends keeps the
-    dorsiflexion that let the toe clear the ground at t1 (see control/double_support.py)."""
+    """theta5, theta6 of the swing foot at ``t``: the schedule of kinematics/swing_foot.py, the same
+    formula the body's angles use."""
     n = names(c)
-    s = ca.fmax(0, (t - n.foot_from_time) / (n.swing_end_time - n.foot_from_time))
-    return (n.theta5_from + s * (n.theta5_impact - n.theta5_from),
-            n.theta6_from + s * (n.theta6_impact - n.theta6_from))
+    values = {name: getattr(n, f"foot_{name}") for name in SCHEDULE_FIELDS}
+    return schedule_angles(t, values, lambda x, lo, hi: ca.fmin(ca.fmax(x, lo), hi))
 
 
 def foot(q_swing, hip, t, c):
