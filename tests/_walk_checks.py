@@ -163,14 +163,22 @@ def world_hip_velocities(states: np.ndarray) -> np.ndarray:
                             wd * np.cos(theta1) - w * theta1d * np.sin(theta1)])
 
 
-def swing_foot_angles(context: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """θ5, θ6 of the swing foot at times ``t``, from the schedule the swing's context carries
-    (kinematics/swing_foot.py, the formula the swing's path functions use)."""
-    values = {name: float(context[SWING_CONTEXT.index[f"foot_{name}"]]) for name in SCHEDULE_FIELDS}
-    return SwingFoot(**values).angles(t)
+def swing_foot_schedule(context: np.ndarray) -> SwingFoot:
+    """The swing foot's schedule the swing's context carries (kinematics/swing_foot.py, the
+    formula the swing's path functions use)."""
+    return SwingFoot(**{name: float(context[SWING_CONTEXT.index[f"foot_{name}"]]) for name in SCHEDULE_FIELDS})
 
 
-def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense) -> tuple[np.ndarray, np.ndarray]:
+def swing_ankle_heights(body, origin_x: float, name: str, dense: Dense) -> np.ndarray:
+    """Height above the ground (m) of the swing ankle at the dense samples of a swing subphase."""
+    hips = world_hips(body, dense.x, origin_x)
+    theta3 = dense.x[:, 6]
+    theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
+    return hips[:, 1] - body.l3 * np.cos(theta3) - body.l4 * np.cos(theta3 + theta4)
+
+
+def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense,
+                       grounded: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Heights above the ground (m) of the swing foot's toe tip and heel at the dense samples of a
     swing subphase: the hip from the carried stance state, the leg from θ3 and θ4 (0 in swing3,
     where the knee is locked) with the thigh l3 and shank l4, the foot from
@@ -180,7 +188,11 @@ def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense) 
     theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
     knee = hips - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
     ankle = knee - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)])
-    theta5, theta6 = swing_foot_angles(context, dense.t)
+    # the body's foot (``grounded``: turned where the schedule would put it into the ground) or the
+    # scheduled foot the solvers' path functions see
+    schedule = swing_foot_schedule(context)
+    theta5, theta6 = (schedule.grounded_angles(body, dense.t, ankle[:, 1], theta3 + theta4) if grounded
+                      else schedule.angles(dense.t))
     toe, heel = np.empty(len(dense.t)), np.empty(len(dense.t))
     for i in range(len(dense.t)):
         foot_heel, _, foot_toe = foot_points_float(ankle[i, 0], ankle[i, 1], theta3[i] + theta4[i], theta5[i],

@@ -14,7 +14,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from _walk_checks import (COARSE, COARSE_IDS, METHODS, TOE_DIP_BETWEEN_NODES, coarse_walk, dense_trajectory,
-                          eq2_timings, eq3_landing, record_walk, swing_foot_heights, world_hip_velocities,
+                          eq2_timings, eq3_landing, record_walk, swing_ankle_heights, swing_foot_heights,
+                          world_hip_velocities,
                           world_hips)
 from klaw_ocp.dynamics import CONSERVED, heel_strike_conserved, heel_strike_map, swing_leg_points
 
@@ -157,29 +158,50 @@ def test_the_swing2_toe_keeps_its_clearance_between_the_nodes(grid_walk):
     for step in _steps(grid_walk):
         problem, _ = grid_walk.problems[(step.index, "swing2")]
         toe, _ = swing_foot_heights(body, step.origin_x, "swing2", problem.context,
-                                    grid_walk.dense(step.index, "swing2"))
+                                    grid_walk.dense(step.index, "swing2"), grounded=False)
         assert toe.min() >= clearance - TOE_DIP_BETWEEN_NODES, step.index
 
 
-@pytest.mark.xfail(strict=True, reason="issue #22 (swing foot, §4.3): today's swing foot keeps its t1 "
-                   "angles from toe-off to t2, so its toe dips below the ground just after toe-off at "
-                   "6.5-9 km/h and its heel below the ground in swing2 and swing3 at most speeds")
-def test_the_swing_foot_stays_above_the_ground_through_the_whole_swing():
-    """Toe tip and heel of the swing foot above the ground (1 µm) on the dense grid of swing1,
-    swing2 and swing3, every step of every walk of the coarse grid in both modes."""
-    below = []
+def _swing_feet():
+    """(where, ankle heights, lowest of toe and heel) on the dense grid of every swing subphase of
+    every step of the coarse grid in both modes."""
     for method in METHODS:
         for point in COARSE:
             recorded = coarse_walk(method, point)
             for step in recorded.walk.steps:
                 for name in SUBPHASES[1:]:
                     problem, _ = recorded.problems[(step.index, name)]
-                    toe, heel = swing_foot_heights(recorded.body, step.origin_x, name, problem.context,
-                                                   recorded.dense(step.index, name))
-                    lowest = min(toe.min(), heel.min())
-                    if lowest < -1e-6:
-                        below.append(f"{method} {point} step {step.index} {name}: {1000 * lowest:.1f} mm")
-    assert not below, "\n".join(below)
+                    dense = recorded.dense(step.index, name)
+                    toe, heel = swing_foot_heights(recorded.body, step.origin_x, name, problem.context, dense)
+                    ankle_y = swing_ankle_heights(recorded.body, step.origin_x, name, dense)
+                    yield (f"{method} {point} step {step.index} {name}", recorded.body, ankle_y,
+                           np.minimum(toe, heel))
+
+
+def test_the_swing_foot_stays_above_the_ground_wherever_a_foot_fits():
+    """Toe tip and heel of the body's swing foot (kinematics/swing_foot.py) above the ground on the
+    dense grid of swing1, swing2 and swing3, every step of every walk of the coarse grid in both
+    modes, wherever the ankle is at least l9 up (a flat foot fits there). Between the nodes, where
+    swing2's toe clearance is a constraint, the foot may dip by TOE_DIP_BETWEEN_NODES."""
+    below, checked = [], 0
+    for where, body, ankle_y, lowest in _swing_feet():
+        fits = ankle_y >= body.l9
+        checked += int(fits.sum())
+        if fits.any() and lowest[fits].min() < -TOE_DIP_BETWEEN_NODES:
+            below.append(f"{where}: {1000 * lowest[fits].min():.2f} mm")
+    assert checked > 1000 and not below, "\n".join(below)
+
+
+@pytest.mark.xfail(strict=True, reason="the swing leg carries its ankle below l9, where no foot fits above "
+                   "the ground, as the knee reaches full extension at 85 % of the swing over a low hip: in "
+                   "swing2 the foot goes up to 108 mm into the ground in first steps from rest, 3.5-12 mm in "
+                   "steady steps at 1-2 km/h, 7-20 mm in closing steps (swing2 and swing3). The paper's "
+                   "recovery actuator (thigh flexion) cannot lift a near-vertical leg; fixed by the swing2 "
+                   "knee-extension timing of the normative-gait issue")
+def test_the_swing_ankle_stays_high_enough_for_a_foot():
+    low = [f"{where}: {1000 * (ankle_y.min() - body.l9):.2f} mm" for where, body, ankle_y, _ in _swing_feet()
+           if ankle_y.min() < body.l9 - TOE_DIP_BETWEEN_NODES]
+    assert not low, "\n".join(low)
 
 
 def test_the_stored_trajectories_are_the_model_between_the_nodes(grid_walk):

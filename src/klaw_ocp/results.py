@@ -27,6 +27,7 @@ import numpy as np
 from .control.parameter_units import parameter_unit
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
+from .kinematics.swing_foot import sole_heights
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -118,6 +119,31 @@ def hip_dip(body, stance) -> float:
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 
+def swing_foot_clearance(body, step) -> dict:
+    """The swing foot's lowest toe tip and heel (m above the ground) at the swing's samples
+    between toe-off and heel strike (both ends excluded: there the toe, then the heel, touch the
+    ground by definition), and its lowest toe in swing2 (the mid-swing toe clearance that
+    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py)."""
+    origin = np.array([step.origin_x, body.l9])
+    toe, heel, mid_toe = [], [], []
+    for name in ("swing1", "swing2", "swing3"):
+        sub = step.subphase(name)
+        keep = slice(1 if name == "swing1" else 0, -1 if name == "swing3" else None)
+        t, x = sub.t[keep], sub.states[keep]
+        hips = stance_hips(body, x[:, :6], origin)[0]
+        theta3 = x[:, 6]
+        theta4 = x[:, 7] if name != "swing3" else np.zeros(len(t))
+        ankle_y = hips[:, 1] - body.l3 * np.cos(theta3) - body.l4 * np.cos(theta3 + theta4)
+        theta5, theta6 = step.swing_foot.grounded_angles(body, t, ankle_y, theta3 + theta4)
+        h, tt = sole_heights(body, ankle_y, theta3 + theta4, theta5, theta6)
+        heel.append(h)
+        toe.append(tt)
+        if name == "swing2":
+            mid_toe.append(tt)
+    return {"toe_min_m": float(np.concatenate(toe).min()), "heel_min_m": float(np.concatenate(heel).min()),
+            "midswing_toe_min_m": float(np.concatenate(mid_toe).min())}
+
+
 def foot_events(walk) -> list[dict]:
     """Every foot event of the walk, in time order: ``time`` (s, walk time), ``side`` (right or
     left) and ``event``: ``heel_strike``, ``foot_flat``, ``heel_off`` (the virtual leg's periods,
@@ -148,6 +174,7 @@ def walk_summary(walk, table: dict | None = None) -> dict:
         entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                      hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                      hip_dip_m=hip_dip(walk.spec.body, step.subphase("stance")), notes=list(step.notes),
+                     swing_foot=swing_foot_clearance(walk.spec.body, step),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
         if step.hip_reference:
             l9, ref = walk.spec.body.l9, step.hip_reference

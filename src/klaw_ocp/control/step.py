@@ -275,7 +275,7 @@ class StepController:
         guess2[1] = 0.0
         s2 = self._solve(index, SubphaseProblem(
             specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c2,
-            guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance]),
+            guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance, -np.inf]),
             recovery_step=np.array([0.0, -0.005]), mode=mode2))
         x_end2 = s2.final_state
         knee = knee_lock_map(b, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
@@ -287,7 +287,7 @@ class StepController:
             self.scales["swing3"], mode=mode3))
         nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
         heel = np.asarray(mapped(specs["swing3"].path, nodes)(
-            s3.states[:-1].T, s3.t[:-1], [s3.parameters["F_theta3_moment"]], c)).ravel()
+            s3.states[:-1].T, s3.t[:-1], [s3.parameters["F_theta3_moment"]], c))[0]
         notes = lock_rule_notes(stance, b.l1)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, s1, s2, s3],

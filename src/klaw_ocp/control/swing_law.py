@@ -17,8 +17,8 @@ States (stance part first, see :mod:`.stance_law`):
 - swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
   holding spring-damper plus a small constant moment that brings the heel down in time.
 
-The kinematic foot (ankle angle theta5, toe angle theta6) keeps its t1 angles through swing2 and is
-interpolated linearly to its heel-strike values in swing3 (§4.3; control/double_support.py for swing1).
+The kinematic foot (ankle angle theta5, toe angle theta6) follows the schedule of
+kinematics/swing_foot.py, the same one the body's angles use.
 """
 from __future__ import annotations
 
@@ -136,9 +136,13 @@ def swing2_forces(x, t, u, c):
     return ca.vertcat(stance_f, *swing2_torques(x, t, u, c))
 
 
-def swing2_toe_height(x, t, u, c):
+def swing2_clearance(x, t, u, c):
+    """Toe tip and heel heights of the swing foot: the toe kept ``toe_clearance`` above the
+    ground (§4.3's recovery), the heel above it (the knee extends towards a foot that is still
+    dorsiflexed)."""
     _, _, hip, _, _ = stance_part(x[0:6], t, c)
-    return foot(x[6:8], hip, t, c)[1][1]
+    heel, toe = foot(x[6:8], hip, t, c)
+    return ca.vertcat(toe[1], heel[1])
 
 
 def swing3_torque(x, t, u, c):
@@ -158,6 +162,9 @@ def swing3_forces(x, t, u, c):
     return ca.vertcat(stance_f, swing3_torque(x, t, u, c), 0)
 
 
-def swing3_heel_height(x, t, u, c):
+def swing3_clearance(x, t, u, c):
+    """Heel and toe tip heights of the swing foot before the heel strikes (reported: swing3's one
+    unknown is fixed by the landing, so these are not constrained)."""
     _, _, hip, _, _ = stance_part(x[0:6], t, c)
-    return foot(ca.vertcat(x[6], 0), hip, t, c)[0][1]
+    heel, toe = foot(ca.vertcat(x[6], 0), hip, t, c)
+    return ca.vertcat(heel[1], toe[1])

@@ -4,9 +4,11 @@
   value at t1.
 - ``swing2`` (to 85 %): unknowns F_theta4 magnitude and the hip position actuator of the recovery
   loop (held at 0 unless the toe would not clear the ground); the knee reaches full extension
-  (theta4 = 0) at t2. Path function: toe height, kept above the toe-clearance attribute.
+  (theta4 = 0) at t2. Path functions: toe height, kept above the toe-clearance attribute, and
+  heel height, kept above the ground.
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
-  t_swing, where the heel lands on the ground (eq. 3 geometry). Path function: heel height.
+  t_swing, where the heel lands on the ground (eq. 3 geometry). Path functions: heel and toe
+  heights (reported, not constrained: the one unknown is fixed by the landing).
 """
 from __future__ import annotations
 
@@ -20,9 +22,11 @@ from .stance_law import STANCE_CONTEXT, stance_plausible
 from .stance_spec import stance_lock_events
 
 _NC = len(law.SWING_CONTEXT)
+SWING2_PATH = ("toe_height", "heel_height")
+SWING3_PATH = ("heel_height", "toe_height")
 
 
-def _spec(name, state, unknowns, rhs, forces, final, path=None, path_name=None, lock_rule="momentum"):
+def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule="momentum"):
     x, t = ca.SX.sym("x", len(state)), ca.SX.sym("t")
     u, c = ca.SX.sym("u", len(unknowns)), ca.SX.sym("c", _NC)
     args = [x, t, u, c]
@@ -34,7 +38,7 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_name=None, 
         outputs=ca.Function(f"{name}_outputs", args, [forces(*args)]),
         output_names=law.SWING_FORCES,
         path=ca.Function(f"{name}_path", args, [path(*args)]) if path else None,
-        path_names=(path_name,) if path else (),
+        path_names=tuple(path_names),
         events=stance_lock_events(len(state), len(unknowns), _NC, lock_rule),
         pairing=((0, 0),),
         # the stance the swing re-simulates (assumption 4) must stay a walk's stance
@@ -50,7 +54,7 @@ def swing_specs(lock_rule: str = "momentum") -> dict:
         "swing1": _spec("swing1", law.SWING1_STATE, ("F_theta3_magnitude",), law.swing1_rhs,
                         law.swing1_forces, theta3_error, lock_rule=lock_rule),
         "swing2": _spec("swing2", law.SWING2_STATE, ("F_theta4_magnitude", "hip_actuator"), law.swing2_rhs,
-                        law.swing2_forces, lambda x, c: x[7], law.swing2_toe_height, "toe_height", lock_rule),
+                        law.swing2_forces, lambda x, c: x[7], law.swing2_clearance, SWING2_PATH, lock_rule),
         "swing3": _spec("swing3", law.SWING3_STATE, ("F_theta3_moment",), law.swing3_rhs,
-                        law.swing3_forces, theta3_error, law.swing3_heel_height, "heel_height", lock_rule),
+                        law.swing3_forces, theta3_error, law.swing3_clearance, SWING3_PATH, lock_rule),
     }

@@ -3,15 +3,34 @@ metatarsal angles are interpolated between their values at toe-off and heel stri
 known from the kinematic meta-off period, the latter are specified as locomotion attributes)".
 
 One schedule per step, :class:`SwingFoot`, written once for two kinds of numbers: plain numpy
-arrays (the body's angles, plots, tests) and CasADi symbols (the swing2 toe-clearance path and the
-swing3 heel height, :mod:`klaw_ocp.control.swing_law`), so the foot the solvers constrain is the
-foot the animation shows.
+arrays (the body's angles, plots, tests) and CasADi symbols (the swing2 and swing3 clearance paths,
+:mod:`klaw_ocp.control.swing_law`), so the foot the solvers constrain is the foot the body shows.
+
+The interpolation, our choice (the text says only "interpolated"), shaped after the ankle of
+people, who dorsiflex quickly after toe-off, hold the foot up while it passes under the body and
+are back at neutral before the heel lands:
+
+- θ5 (ankle): from its toe-off value to ``theta5_t1`` over the first half of swing1, fast at first
+  (an ease-out: the toe lifts from the ground at once), held to t1; ``theta5_t1`` is the heel-strike
+  attribute, dorsiflexed further where the toe under the knee at t1 needs it
+  (:func:`klaw_ocp.control.double_support.swing1_end_posture`), through swing2 (the toe stays up
+  while the knee extends: the paper's recovery loop keeps it ``toe_clearance`` up); then to the
+  heel-strike attribute over swing3 (a smoothstep: zero rate at both ends), so the foot lands at
+  eq. 3's angle with no rotation left;
+- θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
+
+Where the schedule would put the toe or the heel into the ground, the foot the body shows is
+turned, sample by sample, just enough to keep both on or above it
+(:meth:`SwingFoot.grounded_angles`): in swing1, where the ankle follows curve P and the foot plays
+no part in the dynamics, and wherever the straight leg of swing2 and swing3 carries the ankle low.
+Swing2's toe-clearance path constrains the scheduled foot (the paper's recovery loop).
 
 Angles (rad): θ5 from the shank's axis to the foot's (90° neutral, more is dorsiflexion), θ6 the
 toe segment's angle to the foot (> 0 toe up). Times are the step's own (0 at its heel strike).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -19,15 +38,35 @@ import numpy as np
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
                    "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
+#: the fraction of swing1 over which the ankle dorsiflexes from its toe-off angle
+ANKLE_LIFT_FRACTION = 0.5
+#: how far (rad) the swing1 guard may turn the ankle away from its schedule
+GUARD_RANGE = math.radians(60)
 
 
 def schedule_angles(t, s: dict, clip):
     """θ5, θ6 at ``t`` for the schedule values ``s`` (SCHEDULE_FIELDS -> numbers or symbols);
-    ``clip(x, lo, hi)`` is numpy's or CasADi's. Held at the t1 angles until t2, then linear to the
-    heel-strike attributes."""
-    u = clip((t - s["t2"]) / (s["t_heel_strike"] - s["t2"]), 0.0, 1.0)
-    return (s["theta5_t1"] + u * (s["theta5_heel_strike"] - s["theta5_t1"]),
-            s["theta6_heel_strike"] + 0.0 * u)
+    ``clip(x, lo, hi)`` is numpy's or CasADi's (see the module docstring for the shape)."""
+    lift = clip((t - s["t_toe_off"]) / (ANKLE_LIFT_FRACTION * (s["t1"] - s["t_toe_off"])), 0.0, 1.0)
+    swing1 = clip((t - s["t_toe_off"]) / (s["t1"] - s["t_toe_off"]), 0.0, 1.0)
+    swing3 = clip((t - s["t2"]) / (s["t_heel_strike"] - s["t2"]), 0.0, 1.0)
+    ease_out = lift * (2 - lift)
+    smooth3 = swing3 * swing3 * (3 - 2 * swing3)
+    smooth1 = swing1 * swing1 * (3 - 2 * swing1)
+    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * ease_out
+              + (s["theta5_heel_strike"] - s["theta5_t1"]) * smooth3)
+    theta6 = s["theta6_toe_off"] + (s["theta6_heel_strike"] - s["theta6_toe_off"]) * smooth1
+    return theta5, theta6
+
+
+def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray, np.ndarray]:
+    """Heights above the ground (m) of the heel and the toe tip of a foot whose ankle is at height
+    ``ankle_y`` (the foot of :func:`klaw_ocp.dynamics.foot_points_sx`, vectorised)."""
+    alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5     # the backward sole direction
+    reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+    heel = ankle_y + body.l8 * np.sin(alpha) + body.l9 * np.cos(alpha)
+    toe = ankle_y - reach * np.sin(alpha) + body.l9 * np.cos(alpha) - body.l13 * np.sin(alpha + theta6)
+    return heel, toe
 
 
 @dataclass(frozen=True)
@@ -44,7 +83,35 @@ class SwingFoot:
     theta6_heel_strike: float
 
     def angles(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
+        """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
         t = np.asarray(t, float)
         theta5, theta6 = schedule_angles(t, asdict(self), np.clip)
         return np.broadcast_to(theta5, t.shape).copy(), np.broadcast_to(theta6, t.shape).copy()
+
+    def grounded_angles(self, body, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
+        """θ5 and θ6 of the foot the body shows at times ``t`` with the swing leg's ankle height
+        ``ankle_y`` and shank angle θ3 + θ4 (each (n,)): the schedule, with the ankle turned just
+        enough (bisection, to 1e-9 rad) that neither the toe nor the heel is below the ground.
+        Turning the ankle up (more θ5) lifts the toe and lowers the heel, so a toe in the ground is
+        met by dorsiflexion, then a heel in the ground by plantarflexion, which leaves the toe on or
+        above the ground whenever a foot fits at all (always while the ankle is at least l9 up: a
+        flat foot fits there)."""
+        t = np.asarray(t, float)
+        theta5, theta6 = self.angles(t)
+        ankle_y, shank = np.broadcast_to(ankle_y, t.shape), np.broadcast_to(shank_angle, t.shape)
+        heel, toe = sole_heights(body, ankle_y, shank, theta5, theta6)
+        for low, direction in ((toe < 0, 1.0), (heel < 0, -1.0)):
+            if not low.any():
+                continue
+            a, s6 = ankle_y[low], theta6[low]
+            lo, hi = theta5[low], theta5[low] + direction * GUARD_RANGE   # lo: below the ground
+
+            def below(th5):
+                heel_k, toe_k = sole_heights(body, a, shank[low], th5, s6)
+                return (toe_k if direction > 0 else heel_k) < 0
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                under = below(mid)
+                lo, hi = np.where(under, mid, lo), np.where(under, hi, mid)
+            theta5[low] = hi
+        return theta5, theta6
