@@ -178,27 +178,40 @@ def swing_ankle_heights(body, origin_x: float, name: str, dense: Dense) -> np.nd
 
 
 def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense,
-                       grounded: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                       swing_leg=None) -> tuple[np.ndarray, np.ndarray]:
     """Heights above the ground (m) of the swing foot's toe tip and heel at the dense samples of a
     swing subphase: the hip from the carried stance state, the leg from θ3 and θ4 (0 in swing3,
     where the knee is locked) with the thigh l3 and shank l4, the foot from
-    :func:`klaw_ocp.dynamics.foot_points_float` with the context's foot angles."""
+    :func:`klaw_ocp.dynamics.foot_points_float`. The foot is the scheduled one the solvers' path
+    functions see, or, given ``swing_leg`` (the whole swing's leg: :func:`swing_leg_function`),
+    the body's foot, turned where the schedule would put it into the ground."""
     hips = world_hips(body, dense.x, origin_x)
     theta3 = dense.x[:, 6]
     theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
     knee = hips - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
     ankle = knee - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)])
-    # the body's foot (``grounded``: turned where the schedule would put it into the ground) or the
-    # scheduled foot the solvers' path functions see
     schedule = swing_foot_schedule(context)
-    theta5, theta6 = (schedule.grounded_angles(body, dense.t, ankle[:, 1], theta3 + theta4) if grounded
-                      else schedule.angles(dense.t))
+    theta5, theta6 = (schedule.angles(dense.t) if swing_leg is None
+                      else schedule.grounded_angles(body, dense.t, swing_leg))
     toe, heel = np.empty(len(dense.t)), np.empty(len(dense.t))
     for i in range(len(dense.t)):
         foot_heel, _, foot_toe = foot_points_float(ankle[i, 0], ankle[i, 1], theta3[i] + theta4[i], theta5[i],
                                                    theta6[i], body.l8, body.l9, body.l12, body.l13)
         toe[i], heel[i] = foot_toe[1], foot_heel[1]
     return toe, heel
+
+
+def swing_leg_function(recorded: RecordedWalk, step):
+    """times -> (ankle height, shank angle) of a step's swing leg, linear between the dense samples
+    of swing1, swing2 and swing3 (what the body's foot needs: SwingFoot.grounded_angles)."""
+    t, ankle_y, shank = [], [], []
+    for name in ("swing1", "swing2", "swing3"):
+        dense = recorded.dense(step.index, name)
+        t.append(dense.t)
+        ankle_y.append(swing_ankle_heights(recorded.body, step.origin_x, name, dense))
+        shank.append(dense.x[:, 6] + (dense.x[:, 7] if name != "swing3" else 0.0))
+    t, ankle_y, shank = (np.concatenate(v) for v in (t, ankle_y, shank))
+    return lambda times: (np.interp(times, t, ankle_y), np.interp(times, t, shank))
 
 
 def eq2_timings(step_frequency_spm: float, swing1_fraction=0.5, swing2_fraction=0.85) -> dict:

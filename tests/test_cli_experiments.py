@@ -15,7 +15,8 @@ from klaw_ocp.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
-PLOT_FILES = {"hip_height.png", "gait_diagram.png", "torques.png", "states.png", "legs.png"}
+PLOT_FILES = {"hip_height.png", "gait_diagram.png", "torques.png", "states.png", "legs.png",
+              "joint_angles.png", "body.png"}
 
 
 def _one_error_line(capsys) -> str:

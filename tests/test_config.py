@@ -88,6 +88,7 @@ def test_defaults_and_output_dir():
                                      "max_iterations": 50, "nlp": "auto", "stance": "monitored",
                                      "lock_rule": "momentum"}
     assert c.output_dir() == Path("/tmp/elsewhere")
+    assert c.output.fps == 30.0 and c.output.plots is True
     assert c.walk.start_from_rest is False and c.walk.end_at_rest is False
 
 
@@ -121,6 +122,10 @@ BAD = [
     (_base(solver={"lock_rule": "elastic"}), "solver.lock_rule: got 'elastic', allowed one of 'momentum' or 'zero'"),
     (_base(name="Natural Walk"), "name: got 'Natural Walk', allowed a slug of lowercase letters, digits, '_' and '-'"),
     (_base(output={"animation": 1}), "output.animation: got 1, allowed true or false"),
+    (_base(output={"fps": 0}), "output.fps: got 0, allowed a number > 0"),
+    (_base(output={"fps": -1}), "output.fps: got -1, allowed a number > 0"),
+    (_base(output={"fps": "abc"}), "output.fps: got 'abc', allowed a number"),
+    (_base(output={"fps": 1001}), "output.fps: got 1001, allowed a number <= 1000"),
     ({"name": "t", "walk": {"speed": 5.0, "steps": 4}}, "body: got nothing, allowed a required value"),
     ([1, 2], "config: got [1, 2], allowed a mapping with name, body, walk"),
 ]

@@ -1,4 +1,4 @@
-"""The five plots of a run (klaw_ocp.io.plots, gait_diagram, strobe): they render readable PNGs,
+"""The plots of a run (klaw_ocp.io.plots, gait_diagram, strobe, body_plots): they render readable PNGs,
 the gait diagram's bars are the summary's state-phase timings (§3, eq. 2, figure 3), the strobe is
 the dynamic model's geometry (figure 2, figure 8), and plotting never imports a solver."""
 import io
@@ -80,11 +80,11 @@ def test_every_plot_renders_a_png_of_its_figure_size_that_is_not_blank(run, name
     assert colours > 50, f"{name}: only {colours} distinct colours"
 
 
-def test_render_plots_gives_the_five_files_and_rejects_unknown_names(natural):
+def test_render_plots_gives_the_seven_files_and_rejects_unknown_names(natural):
     files = render_plots(natural)
     assert {n: f for n, (f, _) in files.items()} == {
         "hip_height": "hip_height.png", "gait_diagram": "gait_diagram.png", "torques": "torques.png",
-        "states": "states.png", "legs": "legs.png"}
+        "states": "states.png", "legs": "legs.png", "joint_angles": "joint_angles.png", "body": "body.png"}
     assert all(data.startswith(b"\x89PNG\r\n\x1a\n") for _, data in files.values())
     assert list(render_plots(natural, ["states"])) == ["states"]
     with pytest.raises(ConfigError, match="plot names: got \\['nope'\\], allowed"):

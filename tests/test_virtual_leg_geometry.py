@@ -12,8 +12,8 @@ from hypothesis import example, given, settings, strategies as st
 from klaw_ocp.body import Body
 from klaw_ocp.dynamics.kinematics import foot_points_float
 from klaw_ocp.gait.attributes import LocomotionAttributes
-from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, REACH_FRACTION, FlatFoot, StanceFoot,
-                                             ankle_angle, hind_foot_at_rest, leg_ik, toe_off_pitch)
+from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, PUSH_EASE_FROM_REST, REACH_FRACTION, FlatFoot,
+                                             StanceFoot, ankle_angle, hind_foot_at_rest, leg_ik, toe_off_pitch)
 
 BODY = Body(1.8, 80)
 ATTRS = LocomotionAttributes.defaults()
@@ -203,13 +203,16 @@ def check_leg(hip, leg, i):
 
 
 def test_the_double_support_pitch_runs_linearly_to_toe_off():
+    """From rest it eases in over the first PUSH_EASE_FROM_REST of the double support (a cubic
+    with zero start rate that joins the line), then runs along the line."""
     hip = np.array([M_X + 0.05 * 1.8, 0.47 * 1.8])   # nearly over the head: the flat foot reaches
     foot = hind_foot_at_rest(BODY, ATTRS, ANKLE_X)
-    assert foot.reach_pitch(hip[None])[0] == 0.0
+    assert foot.reach_pitch(hip[None])[0] == 0.0 and PUSH_EASE_FROM_REST == 0.5
     foot = foot.with_double_support(hip, 0.12, 0.6)
     t = np.array([0.0, 0.03, 0.06, 0.12, 0.2])
     leg = foot.frames(t, np.tile(hip, (len(t), 1)))
-    assert leg.pitch == pytest.approx([0.0, 0.15, 0.3, 0.6, 0.6], abs=1e-12)   # held after toe-off
+    eased = 0.6 * 0.5 * 0.5 ** 2 * (2 - 0.5)        # a·s²(2 - s) of the line's end, s = 0.03 / 0.06
+    assert leg.pitch == pytest.approx([0.0, eased, 0.3, 0.6, 0.6], abs=1e-12)   # held after toe-off
     for i in range(len(t)):
         check_leg(hip, leg, i)
 
@@ -221,10 +224,14 @@ def test_the_double_support_reaches_any_hip(dist, lean, t):
     foot = replace(hind_foot_at_rest(BODY, ATTRS, ANKLE_X), t_toe_off=0.1, pitch_toe_off=math.radians(45))
     leg = foot.frames(np.array([t]), hip[None])
     check_leg(hip, leg, 0)
-    interpolated = math.radians(45) * min(1.0, t / 0.1)
+    through = min(1.0, t / 0.1)
+    if through < PUSH_EASE_FROM_REST:                                # easing in from rest
+        s = through / PUSH_EASE_FROM_REST
+        through = PUSH_EASE_FROM_REST * s * s * (2 - s)
+    interpolated = math.radians(45) * through
     assert leg.pitch[0] >= interpolated - 1e-12                      # raised only, never lowered
     if leg.pitch[0] > interpolated + 1e-9:                           # raised exactly to the reach
-        fraction = 1 - (1 - REACH_FRACTION) * min(1.0, t / 0.1)
+        fraction = 1 - (1 - REACH_FRACTION) * through
         assert np.linalg.norm(leg.ankle[0] - hip) == pytest.approx(fraction * BODY.l1, rel=1e-9)
 
 

@@ -119,13 +119,21 @@ class SolverConfig(BaseModel):
     lock_rule: Literal["momentum", "zero"] = "momentum"
 
 
+#: Frames per second of angles.csv (the body's motion, docs/body.md) unless ``output.fps`` says
+#: otherwise, and the most it may ask for.
+DEFAULT_FPS = 30.0
+MAX_FPS = 1000.0
+
+
 class OutputConfig(BaseModel):
     """Where results go (default ``results/<name>``), whether to draw the plots of the run
-    (``plots/``, docs/experiments.md) and whether to render an animation."""
+    (``plots/``, docs/experiments.md), the frame rate of the body's angles (``angles.csv``,
+    docs/body.md) and whether to render an animation."""
 
     model_config = _STRICT
     dir: Optional[str] = None
     plots: bool = True
+    fps: float = Field(default=DEFAULT_FPS, gt=0, le=MAX_FPS)
     animation: bool = False
 
 

@@ -123,25 +123,23 @@ def swing_foot_clearance(body, step) -> dict:
     """The swing foot's lowest toe tip and heel (m above the ground) at the swing's samples
     between toe-off and heel strike (both ends excluded: there the toe, then the heel, touch the
     ground by definition), and its lowest toe in swing2 (the mid-swing toe clearance that
-    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py)."""
+    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py), on the leg
+    interpolated linearly between the samples."""
     origin = np.array([step.origin_x, body.l9])
-    toe, heel, mid_toe = [], [], []
-    for name in ("swing1", "swing2", "swing3"):
-        sub = step.subphase(name)
-        keep = slice(1 if name == "swing1" else 0, -1 if name == "swing3" else None)
-        t, x = sub.t[keep], sub.states[keep]
-        hips = stance_hips(body, x[:, :6], origin)[0]
-        theta3 = x[:, 6]
-        theta4 = x[:, 7] if name != "swing3" else np.zeros(len(t))
-        ankle_y = hips[:, 1] - body.l3 * np.cos(theta3) - body.l4 * np.cos(theta3 + theta4)
-        theta5, theta6 = step.swing_foot.grounded_angles(body, t, ankle_y, theta3 + theta4)
-        h, tt = sole_heights(body, ankle_y, theta3 + theta4, theta5, theta6)
-        heel.append(h)
-        toe.append(tt)
-        if name == "swing2":
-            mid_toe.append(tt)
-    return {"toe_min_m": float(np.concatenate(toe).min()), "heel_min_m": float(np.concatenate(heel).min()),
-            "midswing_toe_min_m": float(np.concatenate(mid_toe).min())}
+    subs = [step.subphase(name) for name in ("swing1", "swing2", "swing3")]
+    t = np.concatenate([sub.t for sub in subs])
+    x = np.vstack([sub.states[:, :7] for sub in subs])
+    theta4 = np.concatenate([sub.states[:, 7] if sub.name != "swing3" else np.zeros(len(sub.t)) for sub in subs])
+    hips = stance_hips(body, x[:, :6], origin)[0]
+    shank = x[:, 6] + theta4
+    ankle_y = hips[:, 1] - body.l3 * np.cos(x[:, 6]) - body.l4 * np.cos(shank)
+    theta5, theta6 = step.swing_foot.grounded_angles(
+        body, t, lambda times: (np.interp(times, t, ankle_y), np.interp(times, t, shank)))
+    heel, toe = sole_heights(body, ankle_y, shank, theta5, theta6)
+    inside = (t > t[0]) & (t < t[-1])
+    swing2 = (t >= subs[1].t[0]) & (t <= subs[1].t[-1])
+    return {"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
+            "midswing_toe_min_m": float(toe[swing2].min())}
 
 
 def foot_events(walk) -> list[dict]:

@@ -200,7 +200,9 @@ def stance_leg_rules(spec: WalkSpec, result: StepResult) -> StanceFoot:
     if result.index == 0 and spec.start_from_rest:
         foot = StanceFoot.standing(body, attrs, result.origin_x, t_step)
     else:
-        foot = StanceFoot.at_heel_strike(body, attrs, result.origin_x, result.stance_hips[0], t_step)
+        stance = result.subphase("stance")
+        _, hip_velocity = stance_hip(body, stance.states[0], np.array([result.origin_x, body.l9]))
+        foot = StanceFoot.at_heel_strike(body, attrs, result.origin_x, result.stance_hips[0], t_step, hip_velocity)
     return foot.find_heel_off(result.subphase("stance").t, result.stance_hips)
 
 

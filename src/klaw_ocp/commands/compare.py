@@ -135,5 +135,5 @@ def _solve(item: dict, out: Path, quiet: bool):
         walk, failure = exc.partial, f"{item['path']} ({item['method']}, {item['stance']} stance): {exc}"
     folder = out / RUNS_DIR / f"{config.name}-{item['method']}-{item['stance']}"
     header = resolved_header(item["path"], item["sets"], item["method"], item["stance"])
-    write_run(walk, config.resolved_yaml(header), folder, plots=False)
+    write_run(walk, config.resolved_yaml(header), folder, config.output.fps, plots=False)
     return RunData.from_walk(walk), failure

@@ -2,10 +2,12 @@
 level, then the low level step by step), its check without solving, and its plots redrawn from a
 finished results folder.
 
-``run`` writes into the results folder: ``summary.json``, ``dynamics.csv``,
-``config.resolved.yaml`` (the config with its ``--set``, ``--method`` and ``--stance`` folded in
-and every default filled in: running it again gives the same ``dynamics.csv`` bytes) and, unless
-``--no-plots`` or ``output.plots: false``, the five plots of :mod:`klaw_ocp.io.plots` in ``plots/``.
+``run`` writes into the results folder: ``summary.json``, ``dynamics.csv``, ``events.csv``,
+``angles.csv`` (the body at ``output.fps`` frames per second, docs/body.md),
+``config.resolved.yaml`` (the config with its ``--set``, ``--method``, ``--stance`` and ``--fps``
+folded in and every default filled in: running it again gives the same ``dynamics.csv`` bytes)
+and, unless ``--no-plots`` or ``output.plots: false``, the plots of :mod:`klaw_ocp.io.plots` in
+``plots/``.
 """
 from __future__ import annotations
 
@@ -26,7 +28,8 @@ PLOTS_DIR = "plots"
 
 def configure_run(p: argparse.ArgumentParser) -> None:
     p.description = ("Simulate the configured walk step by step and write summary.json, dynamics.csv, "
-                     "config.resolved.yaml and the plots (plots/*.png) to --out (default "
+                     "events.csv, angles.csv (the body's 56 angles at every frame), config.resolved.yaml "
+                     "and the plots (plots/*.png) to --out (default "
                      "results/<name>/). A subphase that does not converge is reported on one line "
                      "(step, subphase, residual); the steps completed before it are still written, "
                      "and the exit code is 1.")
@@ -39,6 +42,8 @@ def configure_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stance", choices=("monitored", "tracking"),
                    help="stance formulation: the paper's monitored pa, or pa optimised over the grid "
                         "to track the hip sinusoid (multiple shooting only; default: solver.stance)")
+    p.add_argument("--fps", metavar="FPS",
+                   help="frames per second of angles.csv, a number > 0 and <= 1000 (default: output.fps, 30)")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the plots (as output.plots: false)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -48,32 +53,34 @@ def handle_run(args: argparse.Namespace) -> int:
     from ..errors import ConvergenceError
     from ..walk import simulate_walk, walk_spec
 
-    config = load(args.config, args.sets, args.method, args.stance)
+    config = load(args.config, args.sets, args.method, args.stance, args.fps)
     out = Path(args.out) if args.out else config.output_dir()
     failure = None
     try:
         walk = simulate_walk(walk_spec(config), progress=not args.quiet)
     except ConvergenceError as exc:
         walk, failure = exc.partial, exc
-    header = resolved_header(args.config, args.sets, args.method, args.stance)
-    paths, plot_s = write_run(walk, config.resolved_yaml(header), out,
+    header = resolved_header(args.config, args.sets, args.method, args.stance, args.fps)
+    paths, plot_s = write_run(walk, config.resolved_yaml(header), out, config.output.fps,
                               plots=config.output.plots and not args.no_plots)
     if failure is not None:
         print(f"{PROG}: error: {failure}; {len(walk.steps)} completed step(s) written to {out}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
-    plots = f"; {len(paths) - 3} plots in {plot_s:.2f} s" if plot_s is not None else ""
+    n_plots = sum(path.parent.name == PLOTS_DIR for path in paths.values())
+    plots = f"; {n_plots} plots in {plot_s:.2f} s" if plot_s is not None else ""
     print(f"{walk.spec.name}: {len(walk.steps)} steps, {walk.duration:.2f} s of walking in {walk.wall_s:.2f} s "
           f"({rtf:.1f}x real time, {walk.spec.method}, {walk.spec.stance} stance){plots}; wrote {out}/")
     return EXIT_OK
 
 
-def write_run(walk, resolved_yaml: str, out: Path, plots: bool = True) -> tuple[dict, float | None]:
-    """Write a walk's result files (each atomically) and, with ``plots``, its plots; returns the
-    paths by name and the plotting time (s, None without plots). Without plots, plots left in
-    ``out/plots`` by an earlier run are removed: they would show another walk."""
+def write_run(walk, resolved_yaml: str, out: Path, fps: float, plots: bool = True) -> tuple[dict, float | None]:
+    """Write a walk's result files (each atomically; the body's angles at ``fps``) and, with
+    ``plots``, its plots; returns the paths by name and the plotting time (s, None without
+    plots). Without plots, plots left in ``out/plots`` by an earlier run are removed: they would
+    show another walk."""
     from ..io import RunData, render_run, write_rendered
-    run = RunData.from_walk(walk)
+    run = RunData.from_walk(walk, fps=fps)
     files = render_run(run)
     files["resolved"] = (RESOLVED_FILE, resolved_yaml.encode("utf-8"))
     paths = write_rendered(files, out)
@@ -122,8 +129,8 @@ def handle_validate(args: argparse.Namespace) -> int:
 
 def configure_plot(p: argparse.ArgumentParser) -> None:
     p.description = ("Redraw the plots of a finished run (hip_height, gait_diagram, torques, states, "
-                     "legs) from its summary.json and dynamics.csv into DIR/plots/ (or --out), "
-                     "without solving.")
+                     "legs and, from its angles.csv, joint_angles and body) from its result files "
+                     "into DIR/plots/ (or --out), without solving.")
     p.epilog = "example: klaw-ocp plot results/natural_walk"
     p.add_argument("dir", metavar="DIR", help="a results folder written by klaw-ocp run")
     p.add_argument("--out", metavar="DIR", help="where to write the plots (default: DIR/plots/)")

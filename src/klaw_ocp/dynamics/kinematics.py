@@ -76,6 +76,22 @@ def foot_points_float(ankle_x: float, ankle_y: float, shank_angle: float, theta5
     return heel, (mx, my), toe
 
 
+def foot_points_arrays(ankle: np.ndarray, shank_angle, theta5, theta6,
+                       l8: float, l9: float, l12: float, l13: float) -> tuple:
+    """:func:`foot_points_float` over n samples at once (the body's frames): ``ankle`` (n, 2) and
+    the angles (n,) -> ``(heel, metatarsal, toe)``, each (n, 2). A test holds it equal to the
+    float form, which the root searches keep for its speed on single values."""
+    ux, uy = np.sin(shank_angle), np.cos(shank_angle)
+    c5, s5 = np.cos(theta5), np.sin(theta5)
+    back = np.column_stack([c5 * ux - s5 * uy, s5 * ux + c5 * uy])      # u_b: u rotated CCW by theta5
+    forward = -back                                                      # u_f
+    up = np.column_stack([-forward[:, 1], forward[:, 0]])                # n: u_f rotated CCW by 90 deg
+    heel = ankle + l8 * back - l9 * up
+    metatarsal = ankle + math.sqrt(l12 ** 2 - l9 ** 2) * forward - l9 * up
+    c6, s6 = np.cos(theta6)[:, None], np.sin(theta6)[:, None]
+    return heel, metatarsal, metatarsal + l13 * (c6 * forward + s6 * up)   # u_f rotated CCW by theta6
+
+
 def foot_points(body, ankle, shank_angle, theta5, theta6=0.0) -> dict:
     """Numeric :func:`foot_points_sx` for a :class:`~klaw_ocp.body.Body`: ``{heel, metatarsal, toe}``."""
     body = check_body(body)

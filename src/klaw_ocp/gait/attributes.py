@@ -154,7 +154,7 @@ _SPECS = [
     _spec("determinants", "pelvic_lateral_shift", "m", 0.02, 0.0, 0.1,
           "§4.2: lateral displacement, 'a maximum shortly after toe-off'; value " + _OURS),
     _spec("determinants", "foot_lateral_distance", "m", 0.08, 0.0, 0.4,
-          "§5 attributes: lateral distance between the feet; value " + _OURS),
+          "§5 attributes: lateral distance between the feet (their centrelines, docs/body.md); value " + _OURS),
     _spec("determinants", "arm_swing_amplitude", "deg", 20.0, 0.0, 60.0,
           "§2.4 principle 3: 'the arms … swing forward with the opposite legs'; amplitude " + _OURS),
 ]
@@ -163,9 +163,8 @@ _SPECS = [
 ATTRIBUTES: Mapping[str, AttributeSpec] = MappingProxyType({s.name: s for s in _SPECS})
 
 #: Registered and validated, but nothing in the package reads them yet, so they do not change a
-#: walk (the body/virtual-leg and pelvis issues will make them act). Remove a name when it acts.
-NOT_USED_YET = frozenset({"pelvic_rotation", "pelvic_list", "pelvic_lateral_shift", "foot_lateral_distance",
-                          "arm_swing_amplitude"})
+#: walk (the pelvis issue will make them act). Remove a name when it acts.
+NOT_USED_YET = frozenset({"pelvic_rotation", "pelvic_list"})
 
 # Pairs (lower, upper) that must stay strictly ordered whatever the overrides.
 _ORDERED_PAIRS = (("sf_min", "sf_max"), ("speed_min", "speed_max"),
@@ -301,8 +300,8 @@ def markdown_table() -> str:
         "in a config's `attributes:` mapping. Units: `deg` angles (radians internally), `l1` a",
         "multiple of the leg length l1 = l3 + l4, `1` a plain fraction. Ranges are inclusive.",
         "Column *walk*: **not used yet** marks an attribute that is validated but that nothing in",
-        "`src/klaw_ocp` reads yet, so setting it does not change the walk (the body/virtual-leg and",
-        "pelvis issues will make it act).",
+        "`src/klaw_ocp` reads yet, so setting it does not change the walk (the pelvis issue will make",
+        "it act).",
     ]
     group = None
     for spec in ATTRIBUTES.values():

@@ -1,4 +1,4 @@
-"""The five plots of every run (``<results>/plots/``), drawn from a :class:`~klaw_ocp.io.run_data.RunData`.
+"""The seven plots of every run (``<results>/plots/``), drawn from a :class:`~klaw_ocp.io.run_data.RunData`.
 
 - ``hip_height.png`` (§4.2): the hip height over time against the vertical sinusoid the stance is
   guided towards (one bump per step, lowest at the heel strikes) and the heel-strike floor the hip
@@ -9,6 +9,8 @@
   recovery (§4.3 "recovery algorithm") shaded.
 - ``states.png`` (§4, figure 2): w, θ1, θ2 of the stance model and θ3, θ4 of the swing model.
 - ``legs.png`` (§5, figure 8): a strobe of the dynamic model, :mod:`klaw_ocp.io.strobe`.
+- ``joint_angles.png`` and ``body.png`` (§4, the body of 56 angles): hip, knee and ankle over the
+  gait cycle, and the skeleton at heel strikes beside the dynamic model, :mod:`klaw_ocp.io.body_plots`.
 
 Every time plot follows bioptim: a dark thin vertical line at each step boundary (heel strike),
 light ones at the subphase boundaries (toe-off, end of swing1, end of swing2), and one colour per
@@ -18,7 +20,7 @@ strike the stance and swing coordinates change legs.
 
 The axes are placed in inches (:func:`~klaw_ocp.io.plot_style.axes_column`), with margins sized
 for their labels, instead of a constrained layout: that alone would cost about a third of the
-time of the five plots. The functions read results only: they never solve and never import a
+time of the plots. The functions read results only: they never solve and never import a
 solver or pyplot.
 """
 from __future__ import annotations
@@ -32,6 +34,7 @@ from ..errors import ConfigError, out_of_range
 from .gait_diagram import gait_diagram_figure, walk_end
 from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, axes_column, new_figure,
                          png_bytes, style_axes)
+from .body_plots import body_figure, joint_angles_figure
 from .strobe import legs_figure
 
 TABLE_SUBPHASES = ("double_support", "swing1", "swing2", "swing3")
@@ -230,6 +233,8 @@ PLOTS = {
     "torques": ("torques.png", torques_figure),
     "states": ("states.png", states_figure),
     "legs": ("legs.png", legs_figure),
+    "joint_angles": ("joint_angles.png", joint_angles_figure),
+    "body": ("body.png", body_figure),
 }
 
 

@@ -2,13 +2,15 @@
 
 :class:`RunData` is built either from a simulated :class:`~klaw_ocp.walk.Walk` in memory
 (:meth:`RunData.from_walk`) or from a results folder that ``klaw-ocp run`` wrote
-(:meth:`RunData.from_folder`: ``summary.json`` and ``dynamics.csv``). Both give the same object,
+(:meth:`RunData.from_folder`: ``summary.json``, ``dynamics.csv`` and ``angles.csv``). Both give the same object,
 so ``klaw-ocp plot DIR`` redraws a finished run and ``klaw-ocp compare`` reads old ones without
 solving anything. Nothing here imports a solver.
 
 ``table`` maps every column of ``dynamics.csv`` (:data:`klaw_ocp.results.COLUMNS`) to an array
 (``subphase`` an array of str, ``step`` of int); ``summary`` is the dict of ``summary.json``
-(:func:`klaw_ocp.results.walk_summary`).
+(:func:`klaw_ocp.results.walk_summary`); ``angles`` every column of ``angles.csv`` (the body at
+every frame: time, root, the 56 angles in degrees, :meth:`klaw_ocp.kinematics.body_motion.BodyMotion.table`),
+or None for a results folder written before the body was.
 """
 from __future__ import annotations
 
@@ -23,34 +25,44 @@ from ..errors import ConfigError
 
 SUMMARY_FILE = "summary.json"
 DYNAMICS_FILE = "dynamics.csv"
+ANGLES_FILE = "angles.csv"
 _TEXT_COLUMNS = ("subphase",)
 _INT_COLUMNS = ("step",)
 
 
 @dataclass
 class RunData:
-    """One run's results: ``name`` (a label), ``summary``, ``table`` and, when read from disk, ``folder``."""
+    """One run's results: ``name`` (a label), ``summary``, ``table``, ``angles`` and, when read
+    from disk, ``folder``."""
     name: str
     summary: dict
     table: dict
     folder: Path | None = None
     extra: dict = field(default_factory=dict)
+    angles: dict | None = None
 
     # -- construction ----------------------------------------------------------------------------
     @classmethod
-    def from_walk(cls, walk, table: dict | None = None, summary: dict | None = None) -> "RunData":
-        """The results of a walk in memory (``table``/``summary``: when the caller has them already)."""
+    def from_walk(cls, walk, table: dict | None = None, summary: dict | None = None,
+                  fps: float | None = None) -> "RunData":
+        """The results of a walk in memory (``table``/``summary``: when the caller has them
+        already), the body's angles at ``fps`` frames per second (default: output.fps's)."""
+        from ..config import DEFAULT_FPS
+        from ..kinematics.body_motion import ANGLES_COLUMNS, body_motion
         from ..results import walk_summary, walk_table
         if table is None:
             table = walk_table(walk) if walk.steps else _empty_table()
         if summary is None:
             summary = walk_summary(walk, table)
-        return cls(name=walk.spec.name, summary=summary, table=table)
+        angles = (body_motion(walk, DEFAULT_FPS if fps is None else fps).table() if walk.steps
+                  else {c: np.array([]) for c in ANGLES_COLUMNS})
+        return cls(name=walk.spec.name, summary=summary, table=table, angles=angles)
 
     @classmethod
     def from_folder(cls, folder, what: str = "results folder") -> "RunData":
-        """Read ``summary.json`` and ``dynamics.csv`` of a finished run; one-line ConfigError if
-        ``folder`` is not one (``what`` names the argument in that message)."""
+        """Read ``summary.json``, ``dynamics.csv`` and, if there is one, ``angles.csv`` of a
+        finished run; one-line ConfigError if ``folder`` is not one (``what`` names the argument
+        in that message)."""
         folder = Path(folder)
         summary_path, table_path = folder / SUMMARY_FILE, folder / DYNAMICS_FILE
         if not folder.is_dir() or not summary_path.is_file() or not table_path.is_file():
@@ -59,6 +71,7 @@ class RunData:
         try:
             summary = json.loads(summary_path.read_text(encoding="utf-8"))
             table = read_table(table_path)
+            angles = read_table(folder / ANGLES_FILE) if (folder / ANGLES_FILE).is_file() else None
         except (OSError, UnicodeDecodeError, ValueError, KeyError) as exc:
             raise ConfigError(f"{what}: got {str(folder)!r} whose result files cannot be read "
                               f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]}), allowed files "
@@ -66,7 +79,8 @@ class RunData:
         if not isinstance(summary, dict) or "steps" not in summary or "body" not in summary:
             raise ConfigError(f"{what}: got {str(summary_path)!r} without steps and body, allowed a "
                               f"{SUMMARY_FILE} written by klaw-ocp run")
-        return cls(name=str(summary.get("name", folder.name)), summary=summary, table=table, folder=folder)
+        return cls(name=str(summary.get("name", folder.name)), summary=summary, table=table, folder=folder,
+                   angles=angles)
 
     # -- views -----------------------------------------------------------------------------------
     @property
@@ -102,7 +116,8 @@ def _empty_table() -> dict:
 
 
 def read_table(path) -> dict:
-    """``dynamics.csv`` -> column name -> array (float; ``subphase`` str; ``step`` int)."""
+    """``dynamics.csv`` or ``angles.csv`` -> column name -> array (float; ``subphase`` str;
+    ``step`` int)."""
     with open(path, newline="", encoding="utf-8") as handle:
         reader = csv.reader(handle)
         header = next(reader)

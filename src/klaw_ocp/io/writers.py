@@ -3,6 +3,8 @@
 - ``summary.json``: :func:`klaw_ocp.results.walk_summary`.
 - ``dynamics.csv``: :func:`klaw_ocp.results.walk_table`, one row per time sample.
 - ``events.csv``: :func:`events_csv`, the foot events (heel strike, foot flat, heel-off, toe-off).
+- ``angles.csv``: :func:`angles_csv`, the body at every frame: time, root, the 56 angles in degrees
+  (:mod:`klaw_ocp.kinematics.body_motion`, docs/body.md).
 """
 from __future__ import annotations
 
@@ -15,7 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import COLUMNS, walk_summary, walk_table
+from ..results import COLUMNS, walk_table
+
+#: Significant digits of angles.csv: 1e-10 degrees and 1e-10 m at 10 m, far below any use (an
+#: animation, a gait curve), at a third of the time of writing every float exactly.
+ANGLES_DIGITS = 12
 
 
 def _umask() -> int:
@@ -63,16 +69,33 @@ def dynamics_csv(walk, table: dict | None = None) -> str:
     return buffer.getvalue()
 
 
-def render_walk(walk) -> dict:
-    """Every result file of ``walk`` in memory: name -> (file name, bytes). Rendering is separate
-    from writing so that the benchmark can time the two, and a failure to render writes nothing."""
-    table = walk_table(walk) if walk.steps else {c: np.array([]) for c in COLUMNS}
-    return _render(walk_summary(walk, table), dynamics_csv(walk, table))
+def render_walk(walk, fps: float | None = None) -> dict:
+    """Every result file of ``walk`` in memory, the body's angles at ``fps`` frames per second
+    (default: output.fps's): name -> (file name, bytes). Rendering is separate from writing so
+    that the benchmark can time the two, and a failure to render writes nothing."""
+    from .run_data import RunData
+    return render_run(RunData.from_walk(walk, fps=fps))
 
 
 def render_run(run) -> dict:
-    """:func:`render_walk` of a :class:`~klaw_ocp.io.run_data.RunData` (its table and summary)."""
-    return _render(run.summary, dynamics_csv(None, run.table))
+    """:func:`render_walk` of a :class:`~klaw_ocp.io.run_data.RunData` (its table, summary and,
+    when it has them, the body's angles)."""
+    files = _render(run.summary, dynamics_csv(None, run.table))
+    if run.angles is not None:
+        files["angles"] = ("angles.csv", angles_csv(run.angles).encode("utf-8"))
+    return files
+
+
+def angles_csv(angles: dict) -> str:
+    """``angles.csv``: the columns of ``angles`` (time, root_x/y/z in m, the 56 angles in degrees,
+    in skeleton.ANGLE_NAMES order) in their order, one row per frame, each value to
+    ANGLES_DIGITS significant digits."""
+    header = ",".join(angles) + "\n"
+    if not len(next(iter(angles.values()))):
+        return header
+    row = ",".join([f"%.{ANGLES_DIGITS}g"] * len(angles))
+    # one format per row (C speed): a repr per value costs more than the body's kinematics
+    return header + "\n".join(row % values for values in zip(*(c.tolist() for c in angles.values()))) + "\n"
 
 
 def events_csv(summary: dict) -> str:
@@ -102,6 +125,6 @@ def write_rendered(files: dict, out_dir) -> dict:
     return paths
 
 
-def write_walk(walk, out_dir) -> dict:
-    """Write every result file of ``walk`` into ``out_dir``; returns name -> path."""
-    return write_rendered(render_walk(walk), out_dir)
+def write_walk(walk, out_dir, fps: float | None = None) -> dict:
+    """Write every result file of ``walk`` (the angles at ``fps``) into ``out_dir``; returns name -> path."""
+    return write_rendered(render_walk(walk, fps), out_dir)

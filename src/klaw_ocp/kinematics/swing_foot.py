@@ -20,7 +20,7 @@ are back at neutral before the heel lands:
 - θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
 
 Where the schedule would put the toe or the heel into the ground, the foot the body shows is
-turned, sample by sample, just enough to keep both on or above it
+turned, sample by sample, by the least angle that keeps both on or above it
 (:meth:`SwingFoot.grounded_angles`): in swing1, where the ankle follows curve P and the foot plays
 no part in the dynamics, and wherever the straight leg of swing2 and swing3 carries the ankle low.
 Swing2's toe-clearance path constrains the scheduled foot (the paper's recovery loop).
@@ -40,8 +40,10 @@ SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "
                    "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
 #: the fraction of swing1 over which the ankle dorsiflexes from its toe-off angle
 ANKLE_LIFT_FRACTION = 0.5
-#: how far (rad) the swing1 guard may turn the ankle away from its schedule
-GUARD_RANGE = math.radians(60)
+#: the fastest the ground guard turns the ankle away from its schedule (rad/s; people's swing ankle
+#: moves at up to about 200-300°/s) and the grid it is computed on (s)
+GUARD_RATE = math.radians(400)
+GUARD_GRID = 0.002
 
 
 def schedule_angles(t, s: dict, clip):
@@ -88,30 +90,61 @@ class SwingFoot:
         theta5, theta6 = schedule_angles(t, asdict(self), np.clip)
         return np.broadcast_to(theta5, t.shape).copy(), np.broadcast_to(theta6, t.shape).copy()
 
-    def grounded_angles(self, body, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
-        """θ5 and θ6 of the foot the body shows at times ``t`` with the swing leg's ankle height
-        ``ankle_y`` and shank angle θ3 + θ4 (each (n,)): the schedule, with the ankle turned just
-        enough (bisection, to 1e-9 rad) that neither the toe nor the heel is below the ground.
-        Turning the ankle up (more θ5) lifts the toe and lowers the heel, so a toe in the ground is
-        met by dorsiflexion, then a heel in the ground by plantarflexion, which leaves the toe on or
-        above the ground whenever a foot fits at all (always while the ankle is at least l9 up: a
-        flat foot fits there)."""
+    def ground_limits(self, body, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
+        """θ5 (rad) at times ``t`` clipped to the angles that keep both the toe and the heel on or
+        above the ground (in closed form), with the swing leg's ankle height ``ankle_y`` and
+        shank angle θ3 + θ4 (each (n,)); and the ground-limit-free schedule's θ6. Of those angles,
+        the range around the level sole, which fits whenever the ankle is at least l9 up (the two
+        ground limits can leave two ranges; this one moves continuously with the leg). Below l9 no
+        foot fits, and the sole is level, the least deep."""
         t = np.asarray(t, float)
         theta5, theta6 = self.angles(t)
         ankle_y, shank = np.broadcast_to(ankle_y, t.shape), np.broadcast_to(shank_angle, t.shape)
-        heel, toe = sole_heights(body, ankle_y, shank, theta5, theta6)
-        for low, direction in ((toe < 0, 1.0), (heel < 0, -1.0)):
-            if not low.any():
-                continue
-            a, s6 = ankle_y[low], theta6[low]
-            lo, hi = theta5[low], theta5[low] + direction * GUARD_RANGE   # lo: below the ground
+        # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
+        # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
+        reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+        heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
+        toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
+        toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
+        lower, upper = np.full(t.shape, -np.inf), np.full(t.shape, np.inf)
+        fits = np.ones(t.shape, bool)
+        for radius, phase in (heel, toe):
+            centre = math.pi / 2 - phase
+            centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
+            half = np.arccos(np.clip(-ankle_y / radius, -1.0, 1.0))
+            fits &= np.abs(math.pi - centre) <= half
+            lower, upper = np.maximum(lower, centre - half), np.minimum(upper, centre + half)
+        to_theta5 = shank - math.pi / 2
+        level = math.pi + to_theta5
+        return np.where(fits, np.clip(theta5, lower + to_theta5, upper + to_theta5), level), theta6
 
-            def below(th5):
-                heel_k, toe_k = sole_heights(body, a, shank[low], th5, s6)
-                return (toe_k if direction > 0 else heel_k) < 0
-            for _ in range(40):
-                mid = 0.5 * (lo + hi)
-                under = below(mid)
-                lo, hi = np.where(under, mid, lo), np.where(under, hi, mid)
-            theta5[low] = hi
-        return theta5, theta6
+    def grounded_angles(self, body, t, leg) -> tuple[np.ndarray, np.ndarray]:
+        """θ5 and θ6 of the foot the body shows at step-local times ``t`` in the swing (n,), for
+        the swing leg ``leg``: a function of times -> (ankle height, shank angle θ3 + θ4).
+
+        The schedule, turned where it would put the toe or the heel into the ground
+        (:meth:`ground_limits`). A ground limit can move fast: where the lowest point of the heel's
+        circle about the ankle grazes the ground, the limiting angle moves as the square root of
+        the ankle's height above it. So the turn away from the schedule is the least one that
+        meets the limits and changes by at most ``GUARD_RATE`` (the smallest cone envelope of the
+        required turns), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
+        same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
+        foot continues and becomes the stance foot. Between the grid's points the limits hold to a
+        fraction of a millimetre; a heel that comes up to its landing point from below the ground
+        (the straight leg of swing3 too low: first steps from rest, closing steps) stays below it
+        in the last moments of the swing."""
+        t = np.asarray(t, float)
+        n = max(int(math.ceil((self.t_heel_strike - self.t_toe_off) / GUARD_GRID)), 1) + 1
+        grid = np.linspace(self.t_toe_off, self.t_heel_strike, n)
+        scheduled, _ = self.angles(grid)
+        required = self.ground_limits(body, grid, *leg(grid))[0] - scheduled
+        turn = np.zeros(n)
+        # the foot leaves and lands as the stance foot has it: no turn at toe-off and heel strike
+        ends = GUARD_RATE * np.minimum(grid - grid[0], grid[-1] - grid)
+        for sign in (1.0, -1.0):                     # dorsiflexion (toe), plantarflexion (heel)
+            part = np.maximum(sign * required, 0.0)
+            if part.any():
+                cone = part[None, :] - GUARD_RATE * np.abs(grid[:, None] - grid[None, :])
+                turn += sign * np.minimum(cone.max(axis=1), ends)
+        theta5, theta6 = self.angles(t)
+        return theta5 + np.interp(t, grid, turn), theta6

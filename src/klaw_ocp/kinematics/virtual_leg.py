@@ -8,7 +8,9 @@ double support of the next step, t_ds later):
 - **normal**: from heel strike the foot rotates about the heel until it is flat, then stays flat
   while the shank rotates over it. The paper leaves open what fixes the foot while it rotates about
   the heel; we let it come down to flat at ``foot_flat_fraction`` of the cycle (about 8 % in
-  people), with zero rate at both ends (a smoothstep), and the knee follow by inverse kinematics;
+  people), arriving with zero rate and starting with the rate that keeps the hip-ankle distance
+  still at heel strike (:meth:`StanceFoot.at_heel_strike`), and the knee follow by inverse
+  kinematics;
 - **heel-off**: when the ankle angle θ5 reaches its limit (``heel_off_theta5``, a dorsiflexion:
   θ5 is the angle from the shank's axis to the foot's, 90° neutral, more when the shank leans
   forward over the foot) the foot rotates about the first metatarsal head (radius l12) while the
@@ -79,6 +81,11 @@ class StanceFoot:
     t_toe_off: float = math.inf
     pitch_ds_start: float = 0.0    # the pitch at the other leg's heel strike
     pitch_toe_off: float = 0.0
+    #: the pitch rate at heel strike (rad/s, >= 0): see :meth:`at_heel_strike`
+    rocker_rate: float = 0.0
+    #: the fraction of the double support over which the push-off eases in from rest (0: at once);
+    #: see :func:`hind_foot_at_rest`
+    push_ease: float = 0.0
     #: the single-support pitch at the stance's nodes, never falling (set by :meth:`find_heel_off`):
     #: θ5 rises as the shank leans over the flat foot and falls again as the knee straightens, and
     #: the heel does not come down again once it is off
@@ -86,9 +93,15 @@ class StanceFoot:
     single_pitch: tuple = ()
 
     @classmethod
-    def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float) -> "StanceFoot":
+    def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float,
+                       hip_velocity=(0.0, 0.0)) -> "StanceFoot":
         """The foot lands on its heel at (ankle_x - l8, 0) with the leg straight: its ankle is l1
-        from the hip and the heel-ankle distance from the heel, which fixes the heel-strike pitch."""
+        from the hip and the heel-ankle distance from the heel, which fixes the heel-strike pitch.
+
+        The foot then comes down as fast as the hip (``hip_velocity``, m/s) approaches it, so that
+        the hip-ankle distance starts still: with the leg straight at heel strike, any shortening
+        rate would bend the knee as the square root of time, an infinite knee rate (23° in the
+        first frame at 30 fps)."""
         foot = FlatFoot(body, ankle_x)
         heel, ankle0 = foot.heel, foot.ankle
         r_heel = float(np.hypot(*(ankle0 - heel)))
@@ -100,9 +113,15 @@ class StanceFoot:
         e = to_hip / dist
         ankle = heel + along * e + across * np.array([e[1], -e[0]])
         sole_up = math.atan2(ankle[1] - heel[1], ankle[0] - heel[0]) - math.atan2(*(ankle0 - heel)[::-1])
-        return cls(foot, -sole_up, math.radians(attrs.theta6_impact),
-                   attrs.foot_flat_fraction * 2 * t_step, math.radians(attrs.heel_off_theta5),
-                   math.radians(attrs.meta_off_theta6), t_step)
+        t_flat = attrs.foot_flat_fraction * 2 * t_step
+        # d|hip - ankle|/dt = e.(v_hip - dA/dp p') = 0, the ankle A turning clockwise about the heel
+        # as the pitch p rises: dA/dp = ((A - heel)_y, -(A - heel)_x)
+        e = (np.asarray(hip, float) - ankle) / body.l1
+        along = float(e @ np.array([ankle[1] - heel[1], heel[0] - ankle[0]]))
+        rate = float(e @ np.asarray(hip_velocity, float)) / along if abs(along) > 1e-12 else 0.0
+        return cls(foot, -sole_up, math.radians(attrs.theta6_impact), t_flat,
+                   math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
+                   rocker_rate=max(rate, 0.0))
 
     @classmethod
     def standing(cls, body: Body, attrs, ankle_x: float, t_step: float) -> "StanceFoot":
@@ -175,43 +194,18 @@ class StanceFoot:
         pitch[need] = hi
         return pitch
 
-    def _rocker_left(self, t: np.ndarray) -> np.ndarray:
-        """How much of the heel-strike rotation is left at ``t`` (1 at heel strike, 0 once flat)."""
-        if self.t_flat <= 0:
-            return np.zeros_like(t)
-        return 1 - smoothstep(t / self.t_flat)
-
     def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
         """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
-        pitch = np.zeros(len(t))
-        rocker = t < self.t_flat
-        pitch[rocker] = self.rocker_pitch * self._rocker_left(t[rocker])
-        # each rule only where it applies: the reach searches are most of the leg's cost
-        single = ~rocker & (t >= self.t_heel_off) & (t < self.t_step)
-        if single.any():
-            pitch[single] = self.reach_pitch(hips[single])
-            if self.single_t:
-                pitch[single] = np.maximum(pitch[single], np.interp(t[single], self.single_t, self.single_pitch))
-        push = ~rocker & (t >= self.t_step)
-        if push.any():
-            through = np.clip((t[push] - self.t_step) / max(self.t_toe_off - self.t_step, 1e-12), 0, 1)
-            linear = self.pitch_ds_start + (self.pitch_toe_off - self.pitch_ds_start) * through
-            pitch[push] = np.maximum(linear, self.reach_pitch(hips[push], 1 - (1 - REACH_FRACTION) * through))
-        return pitch
+
+        def held(t, rows):
+            return np.interp(t[rows], self.single_t, self.single_pitch) if self.single_t else None
+        return rule_pitch({name: getattr(self, name) for name in RULE_FIELDS}, t, hips, self.reach_pitch, held)
 
     def frames(self, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:
         """The leg at stance times ``t`` (n,) with the simulated hips ``hips`` (n, 2)."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
-        pitch = self.pitch(t, hips)
-        pose = self.foot.pose(pitch, self.meta_off_theta6, self.rocker_theta6 * self._rocker_left(t))
-        body = self.foot.body
-        reach = np.hypot(*(pose["ankle"] - hips).T)
-        th3, th4, knee = leg_ik(body, hips, pose["ankle"])
-        period = np.where(pitch > self.meta_off_theta6, META_OFF, np.where(pitch > 0, HEEL_OFF, NORMAL))
-        return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
-                                th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
-                                np.maximum(reach - body.l1, 0.0))
+        return leg_frames(self, t, hips, self.pitch(t, hips), self.rocker_theta6, self.t_flat)
 
     # -- completing the rules -----------------------------------------------------------------
     def _flat_triggers(self, hips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -243,7 +237,11 @@ class StanceFoot:
         if after.any():     # the searches only where the heel is off
             rule[after] = np.maximum(self.ankle_limit_pitch(hips[after]), self.reach_pitch(hips[after]))
         held = np.maximum.accumulate(rule)
-        return replace(self, t_heel_off=first, single_t=tuple(t), single_pitch=tuple(held))
+        # the heel leaves the ground at ``first``: the held pitch rises from 0 there, not along the
+        # line between the nodes around it (which would lift the heel by a jump)
+        single_t = np.r_[t[~after], first, t[after]]
+        return replace(self, t_heel_off=first, single_t=tuple(single_t),
+                       single_pitch=tuple(np.r_[held[~after], 0.0, held[after]]))
 
     @property
     def starts_standing(self) -> bool:
@@ -266,6 +264,76 @@ class StanceFoot:
         start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start,
                        pitch_toe_off=max(pitch_toe_off, start))
+
+
+#: The rules of :meth:`StanceFoot.pitch` that differ from stance to stance (:func:`rule_pitch`
+#: takes them as numbers or one per sample: :mod:`.stance_legs` evaluates many stances at once).
+RULE_FIELDS = ("t_flat", "rocker_pitch", "rocker_rate", "t_heel_off", "t_step", "t_toe_off", "pitch_ds_start",
+               "pitch_toe_off", "push_ease")
+
+
+def _rocker_left(t, t_flat):
+    """How much of the heel-strike toe angle is left at ``t`` (1 at heel strike, 0 once flat)."""
+    return np.where(t_flat > 0, 1 - smoothstep(t / np.where(t_flat > 0, t_flat, 1.0)), 0.0)
+
+
+def _rocker_pitch(t, t_flat, p0, rate):
+    """The pitch while the foot turns about the heel, p0 (1 - s)^k (1 + c s) with s = t/t_flat and
+    p0 the heel-strike pitch: it starts at ``rate`` and reaches flat at t_flat with zero rate,
+    never overshooting. That is the cubic Hermite curve (k = 2) while the rate is at most three
+    times the mean one; a faster start (the hip approaching the heel fast after impact) takes the
+    power (1 - s)^(k + 1), k + 1 = rate·t_flat/|p0| (c = -1). Flat throughout for a standing foot."""
+    turning = (t_flat > 0) & (p0 != 0)
+    t_flat, p0 = np.where(turning, t_flat, 1.0), np.where(turning, p0, -1.0)
+    s = np.clip(t / t_flat, 0.0, 1.0)
+    relative_rate = rate * t_flat / -p0
+    k = np.maximum(2.0, relative_rate - 1)
+    return np.where(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
+
+
+def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.ndarray:
+    """:meth:`StanceFoot.pitch` with the rules (RULE_FIELDS) as numbers or one per sample: ``reach``
+    is :meth:`StanceFoot.reach_pitch` of the foot's geometry, ``held(t, rows)`` the single
+    support's held pitch at those rows (None before the heel-off search has set it)."""
+    def at(name, rows):
+        value = rules[name]
+        return value[rows] if np.ndim(value) else value
+    pitch = np.zeros(len(t))
+    rocker = t < rules["t_flat"]
+    pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker), at("rocker_rate", rocker))
+    # each rule only where it applies: the reach searches are most of the leg's cost
+    single = ~rocker & (t >= rules["t_heel_off"]) & (t < rules["t_step"])
+    if single.any():
+        pitch[single] = reach(hips[single])
+        kept = held(t, single)
+        if kept is not None:
+            pitch[single] = np.maximum(pitch[single], kept)
+    push = ~rocker & (t >= rules["t_step"])
+    if push.any():
+        t_step, ease = at("t_step", push), at("push_ease", push)
+        through = np.clip((t[push] - t_step) / np.maximum(at("t_toe_off", push) - t_step, 1e-12), 0, 1)
+        # easing in: a cubic with zero start rate, joining the line with its slope
+        s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
+        through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
+        start, end = at("pitch_ds_start", push), at("pitch_toe_off", push)
+        linear = start + (end - start) * through
+        pitch[push] = np.maximum(linear, reach(hips[push], 1 - (1 - REACH_FRACTION) * through))
+    return pitch
+
+
+def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> VirtualLegFrames:
+    """The leg on ``geometry``'s foot at the pitches ``pitch``: the foot's pose (the toe angle of
+    heel strike ``rocker_theta6`` fading out by ``t_flat``, numbers or one per sample), then the
+    hip and knee by two-link inverse kinematics."""
+    q = geometry.meta_off_theta6
+    pose = geometry.foot.pose(pitch, q, rocker_theta6 * _rocker_left(t, t_flat))
+    body = geometry.foot.body
+    reach = np.hypot(*(pose["ankle"] - hips).T)
+    th3, th4, knee = leg_ik(body, hips, pose["ankle"])
+    period = np.where(pitch > q, META_OFF, np.where(pitch > 0, HEEL_OFF, NORMAL))
+    return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
+                            th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
+                            np.maximum(reach - body.l1, 0.0))
 
 
 #: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at
@@ -304,7 +372,15 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     return hi
 
 
+#: A foot that stood still starts its push-off from rest over this fraction of the double support.
+#: Its leg may stand straight (a start from rest), and a heel rising at once would then bend the
+#: knee as the square root of time (3.6° in the first 2 ms). It is below 1 - TOE_OFF_RATE_WINDOW
+#: (control/step.py) so that the toe-off posture and rate that start swing1 stay as they were.
+PUSH_EASE_FROM_REST = 0.5
+
+
 def hind_foot_at_rest(body: Body, attrs, ankle_x: float) -> StanceFoot:
     """The hind foot of a walk's first step, with no stance behind it (a walking start or a start
-    from rest): flat until the double support, which then pitches it from its reach to toe-off."""
-    return replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0)
+    from rest): flat until the double support, which then pitches it from its reach to toe-off,
+    easing in from rest (PUSH_EASE_FROM_REST)."""
+    return replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0, push_ease=PUSH_EASE_FROM_REST)

@@ -1,0 +1,234 @@
+"""The human body on the simulated walk: the 37-joint skeleton's root and 56 angles at every frame
+(section 4, principles 2 and 3; docs/body.md).
+
+- Legs (principle 2): in stance the virtual leg (§4.2, :mod:`.virtual_leg`) on the simulated hip,
+  from heel strike through the next step's double support to toe-off; in swing the dynamics' θ3,
+  θ4 with the kinematic swing foot (§4.3, :mod:`.swing_foot`).
+- The planar model in 3D: the pelvis centre weaves sideways (the determinant "lateral
+  displacement", :func:`.upper_body.lateral_displacement`), each foot walks along its own ground
+  line, and each leg moves in the plane through its ground line and its hip (:class:`LegPlanes`).
+- Pelvis: level and square for now (tilt, list and rotation 0), but carried through every step
+  below as angles, so that the determinants of the pelvis can turn it without a rewrite.
+- Upper body (principle 3): :func:`.upper_body.upper_body_motion` from the dynamics' θ2 and the
+  legs' hip flexion.
+
+World frame: x forward, y up, z to the right; m, s, rad.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.kinematics import foot_points_arrays
+from ..results import stance_leg
+from .leg_geometry import leg_ik
+from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
+from .skeleton import ANGLE_NAMES, SIDES
+from .stance_legs import stance_frames
+from .upper_body import StepWindow, lateral_displacement, upper_body_motion
+from .walk_samples import frame_times, locate_steps, stance_at, stance_curves, swing_curves
+
+#: The columns of angles.csv: time (s), the root (pelvis centre, m), then the 56 angles (degrees).
+ANGLES_COLUMNS = ("time", "root_x", "root_y", "root_z") + ANGLE_NAMES
+_POINTS = ("hip", "knee", "ankle", "heel", "metatarsal", "toe")
+_OTHER = {"right": "left", "left": "right"}
+_HIP_FLEXION = {side: ANGLE_NAMES.index(f"{s}_hip_flexion") for s, side in SIDES}
+
+
+@dataclass(frozen=True)
+class BodyMotion:
+    """The body over n frames (world frame, m and rad)."""
+    t: np.ndarray              # (n,) walk time, s
+    root: np.ndarray           # (n, 3) pelvis centre
+    pelvis_angles: np.ndarray  # (n, 3) tilt, list, rotation
+    legs: dict                 # "right"/"left" -> pose.LegPoints, each point (n, 3)
+    upper_body: UpperBody      # the spine, head and arm totals
+    angles: np.ndarray         # (n, 56) in skeleton.ANGLE_NAMES order
+
+    def table(self) -> dict:
+        """angles.csv as columns (ANGLES_COLUMNS): time, root_x/y/z in m, the angles in degrees."""
+        columns = {"time": self.t, "root_x": self.root[:, 0], "root_y": self.root[:, 1], "root_z": self.root[:, 2]}
+        columns.update(zip(ANGLE_NAMES, np.degrees(self.angles).T + 0.0))    # + 0.0: no "-0" in the file
+        return columns
+
+
+@dataclass(frozen=True)
+class Samples:
+    """The frames the body is evaluated at."""
+    t: np.ndarray        # walk time
+    step: np.ndarray     # index of the step the frame belongs to
+    tau: np.ndarray      # step-local time
+
+    @classmethod
+    def of(cls, walk, fps: float) -> "Samples":
+        frames = frame_times(walk.duration, fps)
+        return cls(frames, *locate_steps(walk.steps, frames))
+
+
+@dataclass(frozen=True)
+class LegPlanes:
+    """The planar model in 3D. Each foot's centreline is its ground line (y = 0, z = z_foot, along
+    x); each leg lives in the plane through its ground line and its hip, where the 2D geometry of
+    the model holds: in-plane coordinates (x, v), v the distance from the ground line, are the
+    world point (x, v·y_h/v_leg, z_foot + v·dz/v_leg), dz = z_hip − z_foot and v_leg = sqrt(y_h² +
+    dz²) the hip's in-plane height. The map is an isometry, so every segment keeps its length, and
+    v = 0 is the ground line, so a planted foot stays planted."""
+    foot_z: dict         # side -> z of the foot's centreline (m)
+    hips: dict           # side -> the hip joint centres (n, 3)
+
+    def hip_in_plane(self, side: str) -> np.ndarray:
+        """(n, 2): the hip's x and in-plane height v_leg."""
+        hip = self.hips[side]
+        return np.column_stack([hip[:, 0], np.hypot(hip[:, 1], hip[:, 2] - self.foot_z[side])])
+
+    def to_world(self, side: str, points: np.ndarray, rows=slice(None)) -> np.ndarray:
+        """In-plane points (n, 2) of the leg at ``rows`` of the samples -> world points (n, 3)."""
+        hip, z_foot = self.hips[side][rows], self.foot_z[side]
+        dz = hip[:, 2] - z_foot
+        v_leg = np.hypot(hip[:, 1], dz)
+        v = points[:, 1]
+        return np.column_stack([points[:, 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg])
+
+
+def step_windows(walk) -> list:
+    """Each step as the upper body and the lateral displacement see it (:class:`.upper_body.StepWindow`)."""
+    return [StepWindow(s.t_start, s.plan.timings.t_step, s.plan.timings.t_ds, stance_leg(s.index),
+                       moving=s.plan.constraints.step_length != 0) for s in walk.steps]
+
+
+def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray) -> tuple[LegPlanes, np.ndarray, np.ndarray, np.ndarray]:
+    """The pelvis and the legs' planes at the samples: (planes, pelvis centre (n, 3), lean θ2 (n,),
+    the simulated hip (n, 2): x and height in the planar model).
+
+    The simulated hip is the current step's stance hip, exact in its leg's plane: its in-plane
+    height is the simulated height v, so its world height is sqrt(v² − dz²). The pelvis centre
+    is then where the pelvis angles put it from that hip, at the lateral displacement's z; the
+    other hip is where the pelvis puts it (:func:`.pose.hip_positions`)."""
+    body, attrs = walk.spec.body, walk.spec.attributes
+    n = len(samples.t)
+    hip_sim, lean = stance_at(walk, stance_curves(walk), samples.step, samples.tau)
+    half = attrs.foot_lateral_distance / 2    # the distance between the feet's centrelines
+    foot_z = {"right": half, "left": -half}
+    stance_right = np.array([stance_leg(k) == "right" for k in range(len(walk.steps))])[samples.step]
+    offsets = hip_positions(body, np.zeros((n, 3)), pelvis_angles)     # each hip from the pelvis centre
+    offset = np.where(stance_right[:, None], offsets["right"], offsets["left"])
+    centre_z = lateral_displacement(attrs, step_windows(walk), samples.t)
+    dz = centre_z + offset[:, 2] - np.where(stance_right, foot_z["right"], foot_z["left"])
+    hip_height = np.sqrt(hip_sim[:, 1] ** 2 - dz ** 2)
+    centre = np.column_stack([hip_sim[:, 0] - offset[:, 0], hip_height - offset[:, 1], centre_z])
+    return LegPlanes(foot_z, hip_positions(body, centre, pelvis_angles)), centre, lean, hip_sim
+
+
+def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
+    """The legs while their feet are on the ground: the virtual leg (§4.2) of each stance, from its
+    heel strike through the next step's double support to toe-off, evaluated on its own stance
+    times (so that its foot stays planted) with its hips ``hips[side]`` (n, 2) in its plane.
+
+    Returns (side -> point name -> (n, 2), filled on the rows it covers; side -> those rows (bool))."""
+    n = len(samples.t)
+    t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
+    in_double_support = samples.tau <= t_ds[samples.step]
+    # each stance foot with the step it lands in (step 0's hind foot stood before the walk began)
+    feet = [(-1, walk.steps[0].hind_foot)] + [(k, s.stance_foot) for k, s in enumerate(walk.steps)]
+    sides, rows, t_leg = [], [], []
+    for k, foot in feet:
+        sides.append(stance_leg(k) if k >= 0 else _OTHER[stance_leg(0)])
+        own = np.flatnonzero(samples.step == k)
+        later = np.flatnonzero((samples.step == k + 1) & in_double_support)
+        rows.append(np.r_[own, later])
+        t_leg.append(np.r_[_stance_times(foot, samples.tau[own]), foot.t_step + samples.tau[later]])
+    which = np.repeat(np.arange(len(feet)), [len(r) for r in rows])
+    legs = stance_frames([foot for _, foot in feet], which, np.concatenate(t_leg),
+                         np.vstack([hips[side][r] for side, r in zip(sides, rows)]))
+    points = {side: {name: np.full((n, 2), np.nan) for name in _POINTS} for _, side in SIDES}
+    covered = {side: np.zeros(n, bool) for _, side in SIDES}
+    start = 0
+    for (k, _), side, r in zip(feet, sides, rows):
+        mine = slice(start, start + len(r))
+        for name in _POINTS:
+            points[side][name][r] = getattr(legs, name)[mine]
+        covered[side][r] = True
+        start += len(r)
+    return points, covered
+
+
+def swing_legs(walk, samples: Samples, rows: np.ndarray, simulated_hip: np.ndarray, hip: np.ndarray) -> dict:
+    """The swing leg in its plane at ``rows`` of the samples (all after their step's toe-off).
+
+    The planar model's swing leg, the dynamics' θ3, θ4 hanging from the simulated hip
+    ``simulated_hip`` (len(rows), 2), places the ankle, and the swing foot (§4.3, its grounded
+    angles: :meth:`.swing_foot.SwingFoot.grounded_angles`) on it; ankle and foot keep their heights
+    above the ground in the leg's own plane, so the foot clears the ground exactly as in the model.
+    Thigh and shank reach that ankle from the leg's own hip ``hip`` (in-plane, len(rows), 2) by
+    two-link inverse kinematics (knee forward). While the feet are closer together than the hips,
+    the swing leg's plane puts its hip at most a few millimetres lower than the simulated one (its
+    foot line is nearer under the hip than the stance leg's), so the leg always reaches; at heel
+    strike, with no lateral displacement, the two coincide, and at toe-off the leg continues the
+    virtual leg's posture (the same hip, the same ankle and foot)."""
+    body, steps = walk.spec.body, walk.steps
+    step, tau = samples.step[rows], samples.tau[rows]
+    swing, stance = swing_curves(walk), stance_curves(walk)
+
+    def planar_leg(k, times, hip):
+        """The planar model's swing leg of step k at its times: shank angle and ankle (m)."""
+        theta3, theta4 = swing(np.full(len(times), k), times).T
+        shank = theta3 + theta4
+        knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+        return shank, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+
+    def ankle_and_shank(k):
+        def leg(times):
+            hip, _ = stance_at(walk, stance, np.full(len(times), k), times)
+            shank, ankle = planar_leg(k, times, hip)
+            return ankle[:, 1], shank
+        return leg
+    shank, ankle = np.empty(len(rows)), np.empty((len(rows), 2))
+    theta5, theta6 = np.empty(len(rows)), np.empty(len(rows))
+    for k in np.unique(step):
+        mine = step == k
+        shank[mine], ankle[mine] = planar_leg(k, tau[mine], simulated_hip[mine])
+        theta5[mine], theta6[mine] = steps[k].swing_foot.grounded_angles(body, tau[mine], ankle_and_shank(k))
+    heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
+    _, _, knee = leg_ik(body, hip, ankle)
+    return {"hip": hip, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}
+
+
+def _stance_times(foot, tau: np.ndarray) -> np.ndarray:
+    """The stance foot's own times at its step's ``tau``. The walk's last stance leg has no double
+    support to complete its rules, and the walk ends at the instant it would begin: that last
+    instant keeps the single support's pitch."""
+    return tau if foot.complete else np.minimum(tau, np.nextafter(foot.t_step, 0.0))
+
+
+def body_motion(walk, fps: float) -> BodyMotion:
+    """The body at every frame t = k/fps, k = 0 .. floor(duration·fps), of a walk with at least one
+    step (:class:`~klaw_ocp.walk.Walk`)."""
+    if not walk.steps:
+        raise ValueError("walk: no completed step, so no body motion")
+    body, attrs = walk.spec.body, walk.spec.attributes
+    samples = Samples.of(walk, fps)
+    # level and square for now: the pelvis's determinants (rotation, list) will set these
+    pelvis_angles = np.zeros((len(samples.t), 3))
+    planes, centre, lean, simulated_hip = leg_planes(walk, samples, pelvis_angles)
+    hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
+    in_plane, on_ground = ground_legs(walk, samples, hips)
+    # at any instant at most one leg swings: both legs' swings in one pass
+    swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
+    rows = np.concatenate(list(swinging.values()))
+    swung = swing_legs(walk, samples, rows, simulated_hip[rows],
+                       np.vstack([hips[side][r] for side, r in swinging.items()]))
+    frames, start, legs = slice(None), 0, {}
+    for side, r in swinging.items():
+        for name in _POINTS:
+            in_plane[side][name][r] = swung[name][start:start + len(r)]
+        start += len(r)
+        legs[side] = LegPoints(**{name: planes.to_world(side, in_plane[side][name][frames], frames)
+                                  for name in _POINTS})
+    t, root, pelvis = samples.t[frames], centre[frames], pelvis_angles[frames]
+    angles = skeleton_angles(body, root, pelvis, legs, UpperBody.neutral())
+    hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
+    upper = upper_body_motion(attrs, t, lean[frames], hip_flexion, pelvis)
+    for name, values in upper_body_angles(upper, len(t)).items():
+        angles[:, ANGLE_NAMES.index(name)] = values
+    return BodyMotion(t, root, pelvis, legs, upper, angles)

@@ -1,0 +1,131 @@
+"""The simulated walk between its stored nodes: the stance and swing states at any walk times (the
+body's frames, :mod:`.body_motion`), read from a :class:`~klaw_ocp.walk.Walk`'s steps.
+
+The solvers store each subphase's states at its grid nodes only (20 intervals a subphase). Between
+them the states are cubic Hermite interpolated with the stored rates (w, θ1, θ2 with ẇ, θ̇1, θ̇2;
+θ3, θ4 with θ̇3, θ̇4), so positions and rates match the dynamics at every node and the curves are
+C1 inside a subphase. Swing1 has no θ̇4 state (its knee follows the ankle on curve P, §4.3): its
+θ4 gets the rates of a C1 spline through its nodes. Plain shooting's lock events repeat a node's
+time (the rates jump there): each interval of positive length is interpolated on its own, and a
+sample at the event's instant takes the state after it.
+
+Times: walk time t (s from the first heel strike) and step-local time τ (0 at the step's heel
+strike, t_step at the next). Frames: x forward, y up (the stance model's plane, :mod:`klaw_ocp.dynamics`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def frame_times(duration: float, fps: float) -> np.ndarray:
+    """The frames of a walk of ``duration`` s at ``fps`` frames per second: k/fps for k = 0 ..
+    floor(duration·fps) (the 1e-9 keeps a walk that ends on a frame from losing it to rounding)."""
+    if not (isinstance(fps, (int, float)) and not isinstance(fps, bool) and math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps: expected a finite number > 0, got {fps!r}")
+    return np.arange(math.floor(duration * fps + 1e-9) + 1) / fps
+
+
+def _positive_interval(t_nodes: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """For each time in ``t``, the node i that starts its interval [t_i, t_i+1] of positive length
+    (clamped to the first and last such interval outside the nodes' span)."""
+    intervals = np.flatnonzero(np.diff(t_nodes) > 0)
+    k = np.searchsorted(t_nodes[intervals], t, side="right") - 1
+    return intervals[np.clip(k, 0, len(intervals) - 1)]
+
+
+def hermite(t_nodes, values, rates, t) -> np.ndarray:
+    """Cubic Hermite interpolation of ``values`` with derivatives ``rates`` (both (m,) or (m, c),
+    at the nodes ``t_nodes`` (m,), non-decreasing) at the times ``t`` (n,): (n,) or (n, c)."""
+    t_nodes, t = np.asarray(t_nodes, float), np.asarray(t, float)
+    values, rates = np.asarray(values, float), np.asarray(rates, float)
+    i = _positive_interval(t_nodes, t)
+    h = t_nodes[i + 1] - t_nodes[i]
+    s = (t - t_nodes[i]) / h
+    if values.ndim == 2:
+        s, h = s[:, None], h[:, None]
+    h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
+    h01, h11 = s * s * (3 - 2 * s), s * s * (s - 1)
+    return h00 * values[i] + h10 * h * rates[i] + h01 * values[i + 1] + h11 * h * rates[i + 1]
+
+
+def spline_rates(t_nodes, values) -> np.ndarray:
+    """Rates at the nodes for a C1 Hermite spline through ``values`` (m,): second-order finite
+    differences (np.gradient) over the distinct node times; a repeated node takes the rate of
+    the first node at its time (the value is the same there: nothing jumps)."""
+    t_nodes, values = np.asarray(t_nodes, float), np.asarray(values, float)
+    distinct = np.r_[True, np.diff(t_nodes) > 0]
+    if distinct.sum() < 2:
+        return np.zeros_like(values)
+    rates = np.gradient(values[distinct], t_nodes[distinct])
+    return rates[np.cumsum(distinct) - 1]
+
+
+def locate_steps(steps, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(step index, step-local time τ) of each walk time ``t``: a heel strike's instant belongs to
+    the step it opens, the walk's last instant to the last step (τ = its t_step)."""
+    starts = np.array([s.t_start for s in steps])
+    k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(steps) - 1)
+    return k, t - starts[k]
+
+
+@dataclass(frozen=True)
+class StepCurves:
+    """Curves given per step at step-local node times, evaluated at samples of any steps in one
+    call. The nodes live on the step coordinate u = k + τ/t_step_k, which grows through the walk
+    (one step's last node and the next one's first share u = k + 1, and the later one wins, as a
+    heel strike's instant belongs to the step it opens), so one Hermite pass serves every step."""
+    t_step: np.ndarray   # (steps,) s
+    u: np.ndarray        # (m,) node step coordinates
+    values: np.ndarray   # (m, c)
+    rates: np.ndarray    # (m, c), per unit of u
+
+    @classmethod
+    def of(cls, t_step, pieces) -> "StepCurves":
+        """``pieces``: (step index, node times τ (m,), values (m, c), rates (m, c) per second), in
+        walk order."""
+        t_step = np.asarray(t_step, float)
+        u = [k + np.asarray(tau, float) / t_step[k] for k, tau, _, _ in pieces]
+        rates = [np.asarray(r, float) * t_step[k] for k, _, _, r in pieces]
+        return cls(t_step, np.concatenate(u), np.vstack([v for _, _, v, _ in pieces]), np.vstack(rates))
+
+    def __call__(self, step: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c)."""
+        return hermite(self.u, self.values, self.rates, step + tau / self.t_step[step])
+
+
+def stance_curves(walk) -> StepCurves:
+    """w, θ1, θ2 of every step's simulated stance."""
+    t_step = [s.plan.timings.t_step for s in walk.steps]
+    pieces = [(k, sub.t, sub.states[:, :3], sub.states[:, 3:6])
+              for k, sub in enumerate(s.subphase("stance") for s in walk.steps)]
+    return StepCurves.of(t_step, pieces)
+
+
+def stance_at(walk, curves: StepCurves, step: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The simulated stance at samples (step (n,), τ (n,)): the hip (n, 2), world x and height,
+    hip = ankle + w (sin θ1, cos θ1) with the step's ankle at (origin_x, l9), and the upper body's
+    lean θ2 (n,)."""
+    w, theta1, theta2 = curves(step, tau).T
+    origin_x = np.array([s.origin_x for s in walk.steps])[step]
+    hip = np.column_stack([origin_x + w * np.sin(theta1), walk.spec.body.l9 + w * np.cos(theta1)])
+    return hip, theta2
+
+
+def swing_curves(walk) -> StepCurves:
+    """θ3, θ4 of every step's swing leg from toe-off to heel strike: swing1 (θ4 kinematic: the
+    rates of a C1 spline), swing2 (θ4 with θ̇4), swing3 (the knee locked: θ4 = 0). Swing2's first
+    node repeats swing1's last: the later one wins, as it does between any two subphases."""
+    t_step = [s.plan.timings.t_step for s in walk.steps]
+    pieces = []
+    for k, step in enumerate(walk.steps):
+        swing1, swing2, swing3 = (step.subphase(name) for name in ("swing1", "swing2", "swing3"))
+        x = swing1.states
+        pieces.append((k, swing1.t, x[:, 6:8], np.column_stack([x[:, 8], spline_rates(swing1.t, x[:, 7])])))
+        x = swing2.states
+        pieces.append((k, swing2.t, x[:, 6:8], x[:, 8:10]))
+        x, zero = swing3.states, np.zeros(len(swing3.t))      # states [stance(6), θ3, θ̇3]
+        pieces.append((k, swing3.t, np.column_stack([x[:, 6], zero]), np.column_stack([x[:, 7], zero])))
+    return StepCurves.of(t_step, pieces)
