@@ -18,7 +18,7 @@ import pytest
 from hypothesis import example, given, settings, strategies as st
 
 from klaw_ocp.body import Body
-from klaw_ocp.control import double_support as ds
+from klaw_ocp.control import curve_p as ds
 from klaw_ocp.control.gains import control_gains
 from klaw_ocp.control.stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS, stance_forces
 from klaw_ocp.control.swing_law import (SWING_CONTEXT, curve_p, swing1_forces, swing1_rhs, swing2_torques,

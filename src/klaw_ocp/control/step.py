@@ -26,7 +26,7 @@ TOE_OFF_RATE_WINDOW = 0.1
 
 from ..kinematics.swing_foot import SwingFoot
 from ..kinematics.virtual_leg import toe_off_pitch
-from .double_support import curve_p_coefficients, swing1_end_posture
+from .curve_p import curve_p_coefficients, swing1_end_posture
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,

@@ -13,7 +13,7 @@ are back at neutral before the heel lands:
 - θ5 (ankle): from its toe-off value to ``theta5_t1`` over the first half of swing1, fast at first
   (an ease-out: the toe lifts from the ground at once), held to t1; ``theta5_t1`` is the heel-strike
   attribute, dorsiflexed further where the toe under the knee at t1 needs it
-  (:func:`klaw_ocp.control.double_support.swing1_end_posture`), through swing2 (the toe stays up
+  (:func:`klaw_ocp.control.curve_p.swing1_end_posture`), through swing2 (the toe stays up
   while the knee extends: the paper's recovery loop keeps it ``toe_clearance`` up); then to the
   heel-strike attribute over swing3 (a smoothstep: zero rate at both ends), so the foot lands at
   eq. 3's angle with no rotation left;

@@ -1,9 +1,8 @@
-"""Kinematics that frame the swing: curve P and the swing1 end posture (§4.3).
+"""Kinematics that frame the swing law (:mod:`.swing_law`): curve P and the swing1 end posture (§4.3).
 
-The hind leg's double support ("the continuing stance phase of the hind leg is completed
-kinematically", §3: the foot pitching on the ground before toe-off, the knee by inverse
-kinematics, the toe-off pitch) lives in the virtual leg, kinematics/virtual_leg.py
-(``StanceFoot``, ``toe_off_pitch``); its state at toe-off starts swing1.
+Swing1 starts where the hind leg's double support ends: the virtual leg's toe-off posture
+(kinematics/virtual_leg.py, ``StanceFoot``, ``toe_off_pitch``; "the continuing stance phase of the
+hind leg is completed kinematically", §3), whose ankle is curve P's a0.
 
 Curve P (§4.3): the ankle path of swing1, ``y(s) = sum A_i s^(4-i)`` with s the ankle's forward
 travel since toe-off and the five conditions y(0) = a0, y(C) = a_max, y'(C) = 0, y(D) = a_min,
