@@ -221,7 +221,7 @@ def test_run_writes_to_results_name_in_the_working_directory(tmp_path):
     assert r.returncode == 0, r.stderr
     out = work / "results" / "two_steps"
     assert sorted(p.name for p in out.iterdir()) == ["angles.csv", "config.resolved.yaml", "dynamics.csv", "events.csv",
-                                                   "summary.json"]
+                                                   "summary.json", "walk.bvh", "walk.mot"]
     assert sorted(p.name for p in work.iterdir()) == ["results"]        # nothing else in the cwd
     assert sorted(p.name for p in elsewhere.iterdir()) == ["two_steps.yaml"]   # nor beside the config
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))

@@ -89,8 +89,8 @@ def test_header_counts_tabs_and_columns(tmp_path):
     path = write_mot(tmp_path / "walk.mot", table, BODY)
     header, labels, rows = _read_mot(path)
     assert header == ["walk", "version=1", "nRows=4", f"nColumns={len(labels)}", "inDegrees=yes"]
-    assert labels[0] == "time" and len(labels) == len(set(labels)) == 20
-    assert set(REQUIRED) <= set(labels)
+    assert labels[0] == "time" and len(labels) == len(set(labels)) == 22
+    assert set(REQUIRED) <= set(labels) and {"mtp_angle_r", "mtp_angle_l"} <= set(labels)
     assert len(rows) == 4 and all(len(r) == len(labels) for r in rows)
     assert all("," not in v and " " not in v for r in rows for v in r)      # tabs alone separate
     np.testing.assert_allclose([float(r[0]) for r in rows], table["time"], atol=1e-10)
@@ -150,6 +150,8 @@ def test_refuses_a_table_without_angles_csvs_columns_and_a_bad_model_scale():
     ("L2_bending", 4.0, "lumbar_bending", 4.0),               # both: bending to the right
     ("L5_rotation", 3.0, "lumbar_rotation", 3.0),             # both: the front turns to the left
     ("T6_rotation", 5.0, "lumbar_rotation", 5.0),             # the thorax turns the torso too
+    ("r_toe_dorsiflexion", 20.0, "mtp_angle_r", 20.0),        # both: toes up
+    ("l_toe_dorsiflexion", 15.0, "mtp_angle_l", 15.0),
 ])
 def test_each_angle_lands_on_its_coordinate_with_its_sign(ours, value, coordinate, expected):
     columns = mot_columns(_table(**{ours: value}), BODY)

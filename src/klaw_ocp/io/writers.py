@@ -81,8 +81,14 @@ def render_run(run) -> dict:
     """:func:`render_walk` of a :class:`~klaw_ocp.io.run_data.RunData` (its table, summary and,
     when it has them, the body's angles)."""
     files = _render(run.summary, dynamics_csv(None, run.table))
-    if run.angles is not None:
+    if run.angles is not None and len(run.angles["time"]):
+        from ..body import Body
+        from .bvh import BVH_FILE, bvh_text
+        from .opensim import MOT_FILE, render_mot
         files["angles"] = ("angles.csv", angles_csv(run.angles).encode("utf-8"))
+        files["bvh"] = (BVH_FILE, bvh_text(run).encode("utf-8"))
+        body = Body(run.body["height"], run.body["mass"])
+        files["mot"] = (MOT_FILE, render_mot(run.angles, body, name=run.summary.get("name", "walk")))
     return files
 
 
