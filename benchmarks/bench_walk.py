@@ -15,13 +15,15 @@ shooting with the tracking stance) it runs the walk once to build or load the so
 
 It times the five plots of a run (``klaw_ocp.io.plots.render_plots`` of the multiple-shooting
 walk) on their own line: the first rendering in the process (it imports matplotlib) and the median
-of the others. Then it runs ``klaw-ocp run CONFIG --no-plots`` twice as whole processes with an
-empty kernel cache (the first compiles the kernels, the second loads them) and ``klaw-ocp run
-CONFIG`` with its plots once more, and reports their wall time and peak RSS.
+of the others; and, apart from the walk, its ``walk.gif`` (``klaw_ocp.io.animation``, docs/gif.md:
+rendered and written once, after the plots). Then it runs ``klaw-ocp run CONFIG --no-plots
+--no-animation`` twice as whole processes with an empty kernel cache (the first compiles the
+kernels, the second loads them) and ``klaw-ocp run CONFIG --no-animation`` with its plots once
+more, and reports their wall time and peak RSS.
 The process is pinned to one CPU unless ``--all-cores``. With ``--json`` the last line is one
 JSON object (``realtime_factor``, ``realtime_factor_plain_shooting``, ``realtime_factor_tracking``,
 ``ms_over_ps_time_ratio``, ``cold_cli_s``, ``cold_cli_plots_s``, ``first_cold_cli_s``,
-``plots_s``, ``peak_rss_mb``, ...).
+``plots_s``, ``animation_s``, ``animation_mb``, ``peak_rss_mb``, ...).
 Timings are measured here and in docs/performance.md, never asserted in tests.
 """
 from __future__ import annotations
@@ -95,6 +97,19 @@ def _plots(walk, repeats: int) -> tuple[float, float]:
     return first, statistics.median(times)
 
 
+def _animation(walk) -> tuple[float, float]:
+    """walk.gif of ``walk`` rendered and written once (after the plots: matplotlib is loaded):
+    its time (s) and size (MB)."""
+    from klaw_ocp.io import RunData
+    from klaw_ocp.io.animation import GIF_FILE, write_animation
+    run = RunData.from_walk(walk)
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        path = write_animation(run, os.path.join(out, GIF_FILE))
+        seconds = time.perf_counter() - t0
+        return seconds, os.path.getsize(path) / 1e6
+
+
 #: measures a command's peak RSS from a small process: a child forked from this benchmark (200 MB
 #: of CasADi and compiled kernels) would count the fork's pages before exec as its own
 _RSS_PROBE = ("import resource, subprocess, sys; code = subprocess.call(sys.argv[1:], stdout=subprocess.DEVNULL); "
@@ -106,7 +121,7 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False) -> tuple[float,
     env = dict(os.environ, KLAW_OCP_CACHE_DIR=cache)
     with tempfile.TemporaryDirectory() as out:
         command = shutil.which("klaw-ocp") or "klaw-ocp"   # the command users type, as a whole process
-        flags = [] if plots else ["--no-plots"]
+        flags = ["--no-animation"] + ([] if plots else ["--no-plots"])   # walk.gif is timed apart
         probe = subprocess.Popen([sys.executable, "-c", _RSS_PROBE, command, "run", config_path, "--out", out,
                                   "--quiet", *flags], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         t0 = time.perf_counter()
@@ -117,7 +132,7 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False) -> tuple[float,
     return wall, int(stdout.split()[-1]) / 1024.0
 
 
-def _table(rows: list, cli: list, plots: tuple[float, float]) -> str:
+def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[float, float]) -> str:
     lines = [f"{'mode':34s} {'steps':>5s} {'build s':>8s} {'dynamics s':>10s} {'pipeline s':>10s} "
              f"{'write s':>8s} {'x real time':>11s}"]
     for r in rows:
@@ -131,6 +146,7 @@ def _table(rows: list, cli: list, plots: tuple[float, float]) -> str:
     lines.append("")
     lines.append(f"plots (5 PNGs of the multiple-shooting walk): first {plots[0]:.2f} s (imports matplotlib), "
                  f"then {plots[1]:.2f} s")
+    lines.append(f"animation (walk.gif of the natural walk): {animation[0]:.2f} s, {animation[1]:.2f} MB")
     lines.append("")
     labels = ("--no-plots, first (compiles kernels)", "--no-plots, cached kernels", "with plots, cached kernels")
     for label, (wall, rss) in zip(labels, cli):
@@ -149,7 +165,9 @@ def main() -> None:
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     config = load_config(args.config)
     rows = [_mode(config, method, stance, args.repeats) for method, stance in MODES]
-    plots = _plots(simulate_walk(walk_spec(config, "multiple-shooting")), args.repeats)
+    walk = simulate_walk(walk_spec(config, "multiple-shooting"))
+    plots = _plots(walk, args.repeats)
+    animation = _animation(walk)
     own_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     with tempfile.TemporaryDirectory() as cache:
         cli = [_cold_cli(args.config, cache) for _ in range(2)] + [_cold_cli(args.config, cache, plots=True)]
@@ -160,12 +178,12 @@ def main() -> None:
         "realtime_factor_tracking": tracking["realtime_factor"],
         "ms_over_ps_time_ratio": ms["pipeline_s"] / ps["pipeline_s"],
         "cold_cli_s": cli[1][0], "first_cold_cli_s": cli[0][0], "cold_cli_plots_s": cli[2][0],
-        "plots_first_s": plots[0], "plots_s": plots[1],
+        "plots_first_s": plots[0], "plots_s": plots[1], "animation_s": animation[0], "animation_mb": animation[1],
         "peak_rss_mb": max(rss for _, rss in cli), "benchmark_process_rss_mb": own_rss,
         "walk_s": ms["walked_s"], "modes": rows,
         "machine": {"cpu_count": os.cpu_count(), "pinned_to_one_cpu": not args.all_cores, "python": sys.version.split()[0]},
     }
-    print(_table(rows, cli, plots))
+    print(_table(rows, cli, plots, animation))
     print(f"\nmultiple shooting / plain shooting time: {result['ms_over_ps_time_ratio']:.2f}; "
           f"benchmark process peak RSS {own_rss:.0f} MB")
     for key, op, bound in TARGETS:

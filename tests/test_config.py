@@ -63,6 +63,13 @@ def test_every_shipped_config_loads_and_is_named_after_its_file(path):
     assert len(c.plan()) >= 1
 
 
+@pytest.mark.parametrize("path", CONFIGS, ids=[p.stem for p in CONFIGS])
+def test_every_shipped_config_draws_walk_gif(path):
+    """Issue #23: output.animation is on in the shipped configs (off by default, for other files)."""
+    assert load_config(path).output.animation is True
+    assert ExperimentConfig.from_mapping(_base()).output.animation is False
+
+
 @pytest.mark.parametrize("name, steps, first_sf", [
     ("short_steps", 34, 166.67), ("long_steps", 16, 79.37), ("start_stop_2kmh", 8, 68.04),
     ("start_stop_5kmh", 6, 107.58),

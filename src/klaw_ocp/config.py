@@ -9,7 +9,7 @@ section 5), overrides of the locomotion attributes, and solver and output option
     walk: {speed: 5.0, duration: 12}
     attributes: {trunk_lean: 8.0}
     solver: {method: multiple-shooting}
-    output: {animation: false}
+    output: {animation: true}     # walk.gif (docs/gif.md); off unless asked for, on in configs/
 
 Validation happens in two layers. Pydantic (strict types, ``extra="forbid"``) checks the shape;
 then the model's own validators run the paper's checks (Body ranges, the attribute registry, and
@@ -128,7 +128,8 @@ MAX_FPS = 1000.0
 class OutputConfig(BaseModel):
     """Where results go (default ``results/<name>``), whether to draw the plots of the run
     (``plots/``, docs/experiments.md), the frame rate of the body's angles (``angles.csv``,
-    docs/body.md) and whether to render an animation."""
+    docs/body.md) and whether to render the body walking, ``walk.gif`` (docs/gif.md: a few seconds;
+    off by default, on in the shipped configs, ``run --no-animation`` skips it)."""
 
     model_config = _STRICT
     dir: Optional[str] = None

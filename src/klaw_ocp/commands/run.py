@@ -7,7 +7,8 @@ finished results folder.
 ``config.resolved.yaml`` (the config with its ``--set``, ``--method``, ``--stance`` and ``--fps``
 folded in and every default filled in: running it again gives the same ``dynamics.csv`` bytes)
 and, unless ``--no-plots`` or ``output.plots: false``, the plots of :mod:`klaw_ocp.io.plots` in
-``plots/``.
+``plots/``; with ``output.animation: true`` (the shipped configs) and without ``--no-animation``,
+``walk.gif`` (:mod:`klaw_ocp.io.animation`, docs/gif.md), after the plots and independent of them.
 """
 from __future__ import annotations
 
@@ -24,12 +25,13 @@ VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
 PLOT_HELP = "redraw the plots of a finished results folder, solving nothing"
 RESOLVED_FILE = "config.resolved.yaml"
 PLOTS_DIR = "plots"
+GIF_FILE = "walk.gif"        # = klaw_ocp.io.animation.GIF_FILE (not imported here: it loads matplotlib)
 
 
 def configure_run(p: argparse.ArgumentParser) -> None:
     p.description = ("Simulate the configured walk step by step and write summary.json, dynamics.csv, "
-                     "events.csv, angles.csv (the body's 56 angles at every frame), config.resolved.yaml "
-                     "and the plots (plots/*.png) to --out (default "
+                     "events.csv, angles.csv (the body's 56 angles at every frame), config.resolved.yaml, "
+                     "the plots (plots/*.png) and, with output.animation, walk.gif to --out (default "
                      "results/<name>/). A subphase that does not converge is reported on one line "
                      "(step, subphase, residual); the steps completed before it are still written, "
                      "and the exit code is 1.")
@@ -46,6 +48,8 @@ def configure_run(p: argparse.ArgumentParser) -> None:
                    help="frames per second of angles.csv, a number > 0 and <= 1000 (default: output.fps, 30)")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the plots (as output.plots: false)")
+    p.add_argument("--no-animation", action="store_true",
+                   help="skip walk.gif (as output.animation: false; the plots are not affected)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -61,36 +65,52 @@ def handle_run(args: argparse.Namespace) -> int:
     except ConvergenceError as exc:
         walk, failure = exc.partial, exc
     header = resolved_header(args.config, args.sets, args.method, args.stance, args.fps)
-    paths, plot_s = write_run(walk, config.resolved_yaml(header), out, config.output.fps,
-                              plots=config.output.plots and not args.no_plots)
+    paths, times = write_run(walk, config.resolved_yaml(header), out, config.output.fps,
+                             plots=config.output.plots and not args.no_plots,
+                             animation=config.output.animation and not args.no_animation)
     if failure is not None:
         print(f"{PROG}: error: {failure}; {len(walk.steps)} completed step(s) written to {out}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
     n_plots = sum(path.parent.name == PLOTS_DIR for path in paths.values())
-    plots = f"; {n_plots} plots in {plot_s:.2f} s" if plot_s is not None else ""
+    plots = f"; {n_plots} plots in {times['plots']:.2f} s" if times["plots"] is not None else ""
+    if times["animation"] is not None:
+        plots += f"; {GIF_FILE} in {times['animation']:.2f} s"
     print(f"{walk.spec.name}: {len(walk.steps)} steps, {walk.duration:.2f} s of walking in {walk.wall_s:.2f} s "
           f"({rtf:.1f}x real time, {walk.spec.method}, {walk.spec.stance} stance){plots}; wrote {out}/")
     return EXIT_OK
 
 
-def write_run(walk, resolved_yaml: str, out: Path, fps: float, plots: bool = True) -> tuple[dict, float | None]:
-    """Write a walk's result files (each atomically; the body's angles at ``fps``) and, with
-    ``plots``, its plots; returns the paths by name and the plotting time (s, None without
-    plots). Without plots, plots left in ``out/plots`` by an earlier run are removed: they would
-    show another walk."""
+def write_run(walk, resolved_yaml: str, out: Path, fps: float, plots: bool = True,
+              animation: bool = False) -> tuple[dict, dict]:
+    """Write a walk's result files (each atomically; the body's angles at ``fps``), with ``plots``
+    its plots and with ``animation`` its walk.gif; returns the paths by name and the drawing times
+    {"plots": s, "animation": s} (None for what was not drawn). Plots or a walk.gif left in ``out``
+    by an earlier run and not drawn again are removed: they would show another walk."""
     from ..io import RunData, render_run, write_rendered
     run = RunData.from_walk(walk, fps=fps)
     files = render_run(run)
     files["resolved"] = (RESOLVED_FILE, resolved_yaml.encode("utf-8"))
     paths = write_rendered(files, out)
-    if not plots or not walk.steps:
+    times = {"plots": None, "animation": None}
+    if plots and walk.steps:
+        t0 = time.perf_counter()
+        from ..io.plots import render_plots
+        paths.update(write_rendered(render_plots(run), out / PLOTS_DIR))
+        times["plots"] = time.perf_counter() - t0
+    else:
         _remove_stale_plots(out / PLOTS_DIR)
-        return paths, None
-    t0 = time.perf_counter()
-    from ..io.plots import render_plots
-    paths.update(write_rendered(render_plots(run), out / PLOTS_DIR))
-    return paths, time.perf_counter() - t0
+    gif = None
+    if animation and walk.steps:
+        t0 = time.perf_counter()
+        from ..io.animation import write_animation
+        gif = write_animation(run, out / GIF_FILE)
+        times["animation"] = time.perf_counter() - t0 if gif is not None else None
+    if gif is None:
+        (out / GIF_FILE).unlink(missing_ok=True)
+    else:
+        paths["animation"] = gif
+    return paths, times
 
 
 def _remove_stale_plots(folder: Path) -> None:
@@ -130,10 +150,12 @@ def handle_validate(args: argparse.Namespace) -> int:
 def configure_plot(p: argparse.ArgumentParser) -> None:
     p.description = ("Redraw the plots of a finished run (hip_height, gait_diagram, torques, states, "
                      "legs and, from its angles.csv, joint_angles and body) from its result files "
-                     "into DIR/plots/ (or --out), without solving.")
-    p.epilog = "example: klaw-ocp plot results/natural_walk"
+                     "into DIR/plots/ (or --out), without solving; with --animation also walk.gif.")
+    p.epilog = "example: klaw-ocp plot results/natural_walk --animation"
     p.add_argument("dir", metavar="DIR", help="a results folder written by klaw-ocp run")
     p.add_argument("--out", metavar="DIR", help="where to write the plots (default: DIR/plots/)")
+    p.add_argument("--animation", action="store_true",
+                   help=f"also redraw {GIF_FILE} (into DIR/, or --out; it takes a few seconds)")
 
 
 def handle_plot(args: argparse.Namespace) -> int:
@@ -143,4 +165,9 @@ def handle_plot(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path(args.dir) / PLOTS_DIR
     paths = write_rendered(render_plots(run), out)
     print(f"{run.name}: wrote {len(paths)} plots to {out}/ ({', '.join(p.name for p in paths.values())})")
+    if args.animation:
+        from ..io.animation import write_animation
+        gif = write_animation(run, (Path(args.out) if args.out else Path(args.dir)) / GIF_FILE)
+        print(f"{run.name}: wrote {gif}" if gif is not None
+              else f"{run.name}: no {GIF_FILE} (no angles.csv with two frames, or no completed step)")
     return EXIT_OK

@@ -1,0 +1,550 @@
+"""``walk.gif``: the body walking, a stick figure drawn from a run's ``angles.csv`` (docs/gif.md).
+
+Three panels, drawn at :data:`GIF_FPS` frames per second of walk time (the GIF's own rate: the
+angles' frames, at ``output.fps``, are interpolated linearly to it) and played back in real time:
+
+- *side* (x forward, y up): the skeleton as in ``body.png`` (:mod:`klaw_ocp.io.body_plots`: legs
+  and arms coloured by side, the far left side fainter, spine, shoulders, head), in a window that
+  follows the pelvis, over a ground line with a tick every 0.25 m and a label every metre, and a
+  footprint on the ground wherever a foot was planted (from its heel strike on, drawn where the
+  foot lay flat);
+- *front* (z to the right, the walker's right, y up; seen from behind): the legs, the pelvis
+  (hip to hip), the trunk, shoulders, arms and head, the feet's lines on the ground (each foot
+  walks along its own line) and the pelvis centre's plumb line, which weaves between them;
+- *from above* (z across, stretched; x forward, up the panel): the footprints along the two
+  feet's lines and the pelvis centre's path, the lateral weave, following the walker.
+
+A title names the walk and counts the time. Like every plot it reads results only (a
+:class:`~klaw_ocp.io.run_data.RunData`, from a walk in memory or a finished results folder), so
+``klaw-ocp plot DIR --animation`` redraws it. Every artist is made once; a frame only moves them
+(``set_data``) and the figure is drawn once per frame on its Agg canvas, small (8 x 4 in at
+80 dpi), with no constrained layout and no axis machinery in the moving panels. Frames are
+collected by matplotlib's :class:`~matplotlib.animation.PillowWriter` (no ffmpeg), mapped to one
+shared palette (taken from the first frame, no dithering: flat colours compress well and no
+frame flickers) and written atomically (a temporary file in the same folder, then a rename).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.animation import PillowWriter
+from matplotlib.collections import LineCollection
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Rectangle
+from matplotlib.transforms import blended_transform_factory
+
+from ..body import Body
+from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
+from .gait_diagram import gait_events
+from .plot_style import LEG_COLOURS, add_axes_in, new_figure
+from .strobe import GROUND_COLOUR, TRUNK_COLOUR
+from .writers import _umask
+
+GIF_FILE = "walk.gif"
+#: frames per second of walk.gif; GIF stores frame durations in 1/100 s, so 1000 / GIF_FPS is a
+#: whole number of 10 ms (80 ms) and the GIF plays back in real time
+GIF_FPS = 12.5
+GIF_DPI = 80
+FIGURE_IN = (8.0, 4.0)
+PALETTE_COLOURS = 128
+_UNSEEN = 255                    # a colour not looked up yet (palette indices are < PALETTE_COLOURS)
+SIDE_WINDOW_M = 2.7              # the side view's width of walk
+SIDE_LEAD = 0.45                 # the pelvis at this fraction of the side window from its left edge
+FRONT_HALF_WIDTH_M = 0.42        # the front view spans z = ± this
+PLAN_HALF_WIDTH_M = 0.16         # the view from above spans z = ± this (stretched)
+PLAN_BEHIND_M, PLAN_AHEAD_M = 1.55, 0.75   # ... and x from the pelvis back and forward
+GROUND_LOW_M = -0.17             # room below the ground for the tick labels
+FONT = 8
+FOOTPRINT = {"lw": 4.0, "alpha": 0.55}
+
+_SPINE = ("pelvis", "L5", "L3", "L1", "T12", "T6", "T1", "C7", "C4", "C1")
+_FAINT_SIDE = {"left": 0.55, "right": 1.0}       # side view: the left side is the far one
+
+
+def _leg(s):
+    return [("joint", f"{s}_hip"), ("joint", f"{s}_knee"), ("joint", f"{s}_ankle"), ("landmark", f"{s}_heel"),
+            ("joint", f"{s}_toes"), ("end", f"{s}_toes")]
+
+
+#: the polylines of the stick figure (the points of body_plots._chains, plus the pelvis for the front
+#: view): name -> (colour key, points); a point is (kind, name), kind "joint", "landmark" or "end" (site)
+CHAINS = {
+    "spine": ("trunk", [("joint", j) for j in _SPINE]),
+    "shoulders": ("trunk", [("joint", "r_shoulder"), ("joint", "T1"), ("joint", "l_shoulder")]),
+    "pelvis": ("trunk", [("joint", "r_hip"), ("joint", "pelvis"), ("joint", "l_hip")]),
+    **{f"{side}_leg": (side, _leg(s)) for s, side in SIDES},
+    **{f"{side}_foot": (side, [("joint", f"{s}_ankle"), ("joint", f"{s}_toes")]) for s, side in SIDES},
+    **{f"{side}_arm": (side, [("joint", f"{s}_shoulder"), ("joint", f"{s}_elbow"), ("end", f"{s}_elbow")])
+       for s, side in SIDES},
+}
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """Where a foot was planted: ``side``, from walk time ``t`` (its heel strike, or the walk's
+    start for a foot standing there), ``heel`` and ``toe`` (3,) where the foot lay flat (m)."""
+    side: str
+    t: float
+    heel: np.ndarray
+    toe: np.ndarray
+
+
+def has_animation_data(run) -> bool:
+    """Whether ``run`` has a body to animate: a completed step and two frames of angles."""
+    return bool(run.steps) and run.angles is not None and len(run.angles["time"]) > 1
+
+
+def gif_times(run, fps: float = GIF_FPS) -> np.ndarray:
+    """Walk time of every GIF frame: k / fps (k = 0, 1, ...) from the walk's first heel strike to
+    its end, whatever the frame rate of angles.csv (a frame after its last one holds that pose)."""
+    start = float(run.steps[0]["t_start_s"])
+    return start + np.arange(int(np.floor(run.duration * fps + 1e-9)) + 1) / fps
+
+
+def skeleton_at(run, times):
+    """The skeleton (skeleton.SkeletonFrames) at walk times ``times``: the root and the angles
+    interpolated linearly between the frames of angles.csv (degrees, as in the file)."""
+    a, times = run.angles, np.clip(np.atleast_1d(np.asarray(times, float)), run.angles["time"][0],
+                                   run.angles["time"][-1])
+    root = np.column_stack([np.interp(times, a["time"], a[f"root_{axis}"]) for axis in "xyz"])
+    angles = np.radians(np.column_stack([np.interp(times, a["time"], a[name]) for name in ANGLE_NAMES]))
+    return forward_kinematics(Body(height=run.body["height"], mass=run.body["mass"]), root, angles)
+
+
+def _point(skeleton, kind: str, name: str) -> np.ndarray:
+    if kind == "joint":
+        return skeleton.position(name)
+    return (skeleton.landmarks if kind == "landmark" else skeleton.end_sites)[name]
+
+
+def chain_points(skeleton) -> dict:
+    """CHAINS name -> (n, k, 3): each polyline's points at every frame of ``skeleton``."""
+    return {name: np.stack([_point(skeleton, *p) for p in points], axis=1) for name, (_, points) in CHAINS.items()}
+
+
+def _events(run) -> list[tuple[float, str, str]]:
+    """(time, side, event) of every foot event: the summary's (as events.csv) and the walk's last
+    heel strike, which closes it and is not among them; for results written before the events
+    were, the heel strikes and toe-offs of :func:`gait_events`."""
+    strikes = sorted((t, leg, kind) for leg, kind, t in gait_events(run))
+    events = run.summary.get("events")
+    if not events:
+        return strikes
+    found = sorted((float(e["time"]), e["side"], e["event"]) for e in events)
+    if strikes and strikes[-1][2] == "heel_strike" and not any(
+            abs(t - strikes[-1][0]) < 1e-9 and side == strikes[-1][1] and kind == "heel_strike"
+            for t, side, kind in found):
+        found.append(strikes[-1])
+    return found
+
+
+def footprints(run) -> list[Footprint]:
+    """Every planting of a foot, in time order: from each heel strike (and the walk's start for a
+    foot already standing there, one whose first event is not a heel strike), the foot laid flat
+    on the ground where it stands at its next foot flat (the heel strike itself when none follows
+    before the foot lifts, as at the heel strike that closes the walk; the start for a standing
+    foot): :func:`_laid_flat`."""
+    t0 = float(run.angles["time"][0])
+    plants = []                      # (side, appears, flat)
+    for _, side in SIDES:
+        mine = [(t, kind) for t, leg, kind in _events(run) if leg == side]
+        if mine and mine[0][1] != "heel_strike":          # standing there when the walk starts
+            plants.append((side, t0, t0))
+        for k, (t, kind) in enumerate(mine):
+            if kind != "heel_strike":
+                continue
+            following = mine[k + 1:k + 2]
+            plants.append((side, t, following[0][0] if following and following[0][1] == "foot_flat" else t))
+    if not plants:
+        return []
+    plants.sort(key=lambda p: p[1])
+    skeleton = skeleton_at(run, [flat for _, _, flat in plants])
+    prints = []
+    for i, (side, t, _) in enumerate(plants):
+        heel, toe = _laid_flat(skeleton.landmarks[f"{side[0]}_heel"][i], skeleton.end_sites[f"{side[0]}_toes"][i])
+        prints.append(Footprint(side, float(t), heel, toe))
+    return prints
+
+
+def _laid_flat(heel: np.ndarray, toe: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The foot from ``heel`` to ``toe`` (tip) laid flat on the ground (y = 0), in its direction
+    seen from above, about its lower end (a flat foot stays where it is; a foot on its toes keeps
+    its toes, one on its heel its heel)."""
+    along = np.array([toe[0] - heel[0], 0.0, toe[2] - heel[2]])
+    along *= float(np.linalg.norm(toe - heel)) / max(float(np.linalg.norm(along)), 1e-12)
+    if heel[1] <= toe[1]:
+        heel = np.array([heel[0], 0.0, heel[2]])
+        return heel, heel + along
+    toe = np.array([toe[0], 0.0, toe[2]])
+    return toe - along, toe
+
+
+# -- the figure -------------------------------------------------------------------------------------
+def _rasterise(fig, items) -> list:
+    """Texts ``items`` [(x_px, y_px, text, style)] (display pixels, y up) rasterised once on a
+    transparent figure like ``fig``: for each, (row0, col0, rgb (h, w, 3) float 0-255, alpha
+    (h, w, 1) float 0-1) of the patch of pixels it covers (row0, col0 of the patch's top left,
+    rows counted from the top)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.transforms import IdentityTransform
+    width_in, _ = fig.get_size_inches()
+    lowest = min([0.0] + [y for _, y, _, _ in items])            # a tall layer for labels stacked below
+    height_px = int(np.ceil(fig.bbox.height - lowest)) + 4
+    layer = Figure(figsize=(width_in, height_px / fig.dpi), dpi=fig.dpi)
+    FigureCanvasAgg(layer)
+    layer.patch.set_alpha(0.0)
+    shift = height_px - fig.bbox.height                          # keeps fig's pixel rows from the top
+    texts = [layer.text(x, y + shift, text, transform=IdentityTransform(), **style) for x, y, text, style in items]
+    layer.canvas.draw()
+    rgba = np.asarray(layer.canvas.buffer_rgba()).astype(float) / 255.0
+    height, width = rgba.shape[:2]
+    renderer = layer.canvas.get_renderer()
+    patches = []
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        r0, r1 = max(0, int(height - box.y1) - 2), min(height, int(np.ceil(height - box.y0)) + 2)
+        c0, c1 = max(0, int(box.x0) - 2), min(width, int(np.ceil(box.x1)) + 2)
+        patch = rgba[r0:r1, c0:c1]             # buffer_rgba is straight (not premultiplied) alpha
+        patches.append((r0, c0, patch[..., :3] * 255.0, patch[..., 3:]))   # rows: as in fig (see shift)
+    return patches
+
+
+def _blend(rgb: np.ndarray, patch, row0: int, col0: int, columns=(0, None)) -> None:
+    """Draw a patch of :func:`_rasterise` over ``rgb`` (h, w, 3) uint8 in place, its top left at
+    (row0, col0), only within ``columns`` (first, end)."""
+    _, _, colour, alpha = patch
+    lo, hi = columns[0], rgb.shape[1] if columns[1] is None else columns[1]
+    a, b = max(col0, lo), min(col0 + colour.shape[1], hi)
+    if b <= a:
+        return
+    rows = slice(row0, row0 + colour.shape[0])
+    under = rgb[rows, a:b]
+    c, al = colour[: under.shape[0], a - col0:b - col0], alpha[: under.shape[0], a - col0:b - col0]
+    under[...] = (under * (1.0 - al) + c * al + 0.5).astype(np.uint8)
+
+
+class _StaticText:
+    """The texts that never change (panel titles, legend, fixed scales), collected while the figure
+    is built, rasterised once (:meth:`freeze`) and blended into every frame's pixels
+    (:meth:`blend`): matplotlib lays out and rasterises every text anew at each draw, which took
+    half the time of a frame (and a ``figimage`` of them as much again)."""
+
+    def __init__(self):
+        self.items = []
+        self.patches = []
+
+    def add(self, transform, xy, text: str, **style) -> None:
+        self.items.append((transform, xy, text, {"fontsize": FONT, "color": "#333333", **style}))
+
+    def freeze(self, fig) -> None:
+        """Rasterise the texts at their positions now (every axes placed and limited)."""
+        self.patches = _rasterise(fig, [(*transform.transform(xy), text, style)
+                                        for transform, xy, text, style in self.items])
+
+    def blend(self, rgb: np.ndarray) -> None:
+        for patch in self.patches:
+            _blend(rgb, patch, patch[0], patch[1])
+
+
+class _MovingLabels:
+    """Labels that keep their text and move sideways with a view (the side view's metres): each
+    rasterised once, centred on its anchor, and blended at the anchor's pixel column of the frame,
+    clipped to the view."""
+
+    def __init__(self, fig, ax, values, texts, y: float, style: dict):
+        self.ax, self.values = ax, np.asarray(values, float)
+        x_px, y_px = ax.transData.transform((float(ax.get_xlim()[0]), y))
+        anchor_x = fig.bbox.width / 2
+        # stacked one below the other under the figure, each centred on anchor_x, its top at y_px
+        items = [(anchor_x, y_px - 40 * k, text, {"fontsize": FONT - 1, "ha": "center", "va": "top", **style})
+                 for k, text in enumerate(texts)]
+        self.patches = _rasterise(fig, items)
+        self.row0 = [p[0] - 40 * k for k, p in enumerate(self.patches)]  # back to y_px's rows
+        self.offset = [p[1] - int(round(anchor_x)) for p in self.patches]
+        self.x_px = None
+
+    def place(self) -> None:
+        """Take the anchors' pixel columns from the view's limits now (after a frame's set_xlim)."""
+        self.x_px = self.ax.transData.transform(np.column_stack([self.values, np.zeros_like(self.values)]))[:, 0]
+        box = self.ax.bbox
+        self.columns = (int(round(box.x0)), int(round(box.x1)))
+
+    def blend(self, rgb: np.ndarray) -> None:
+        lo, hi = self.columns
+        for k in np.flatnonzero((self.x_px > lo - 60) & (self.x_px < hi + 60)):
+            col0 = int(round(self.x_px[k])) + self.offset[k]
+            _blend(rgb, self.patches[k], self.row0[k], col0, self.columns)
+
+
+class _Panel:
+    """One view: an axes without axis machinery (no ticks, no spines: a frame draws fast), placed
+    in inches with the limits at one scale in both directions, and the stick figure in the view's
+    two world coordinates ``(u, v)`` (0, 1, 2: x, y, z): one line per colour (the chains of
+    ``chains``, NaN between them) and the head."""
+
+    def __init__(self, fig, rect_in, u: int, v: int, alpha: dict, chains: dict, limits):
+        self.ax = add_axes_in(fig, *rect_in)
+        self.ax.set_axis_off()
+        self.ax.set_autoscale_on(False)
+        self.ax.set_xlim(*limits[0])
+        self.ax.set_ylim(*limits[1])
+        self.u, self.v = u, v
+        self.points, self.lines = {}, {}
+        for key in ("left", "trunk", "right"):
+            mine = [points for name, points in chains.items() if CHAINS[name][0] == key]
+            gap = np.full((mine[0].shape[0], 1, 3), np.nan)
+            self.points[key] = np.concatenate([part for points in mine for part in (points, gap)][:-1], axis=1)
+            colour = TRUNK_COLOUR if key == "trunk" else LEG_COLOURS[key]
+            zorder = {"left": 3, "trunk": 4, "right": 5}[key] if alpha is _FAINT_SIDE else 4
+            self.lines[key] = self.ax.add_line(Line2D([], [], color=colour, lw=2.2, alpha=alpha.get(key, 1.0),
+                                                      solid_capstyle="round", solid_joinstyle="round",
+                                                      zorder=zorder))
+        self.head = self.ax.add_patch(Circle((0, 0), 0.1, facecolor="white", edgecolor=TRUNK_COLOUR, lw=1.4,
+                                             zorder=4))
+
+    def pose(self, head: np.ndarray, i: int) -> None:
+        for key, line in self.lines.items():
+            p = self.points[key][i]
+            line.set_data(p[:, self.u], p[:, self.v])
+        self.head.center = (head[i, self.u], head[i, self.v])
+
+
+def _ground(ax, u0: float, u1: float, minor: float, major: float) -> np.ndarray:
+    """A ground line from u0 to u1 with a tick every ``minor``, longer every ``major``; returns
+    the positions of the long ticks (for their labels)."""
+    ax.fill_between([u0, u1], -0.045, 0.0, color="#e9e3d9", lw=0, zorder=0)
+    ax.plot([u0, u1], [0.0, 0.0], color=GROUND_COLOUR, lw=1.2, zorder=1)
+    ticks = np.arange(np.ceil(u0 / minor - 1e-9), np.floor(u1 / minor + 1e-9) + 1) * minor
+    is_major = np.isclose(np.remainder(ticks + major / 2, major) - major / 2, 0.0, atol=1e-9)
+    length = np.where(is_major, 0.07, 0.035)
+    ax.add_collection(LineCollection([[(u, 0.0), (u, -h)] for u, h in zip(ticks, length)], colors=GROUND_COLOUR,
+                                     lw=0.9, zorder=1))
+    return np.round(ticks[is_major], 9)
+
+
+def _footprint_lines(ax):
+    return {s: ax.add_collection(LineCollection([], colors=LEG_COLOURS[s], zorder=2, capstyle="butt",
+                                                lw=FOOTPRINT["lw"], alpha=FOOTPRINT["alpha"])) for _, s in SIDES}
+
+
+def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
+    """walk.gif's figure, every artist made once, and the function that moves them to a frame
+    (:class:`Animation`). Nothing is drawn here but the static texts."""
+    times = gif_times(run, fps)
+    skeleton = skeleton_at(run, times)
+    chains = chain_points(skeleton)
+    neck, top = skeleton.position("C1"), skeleton.end_sites["C1"]
+    head = neck + 0.45 * (top - neck)
+    radius = 0.55 * float(np.median(np.linalg.norm(top - neck, axis=1)))
+    root = skeleton.position("pelvis")
+    prints = footprints(run)
+    y_range = (GROUND_LOW_M, float(run.body["height"]) + 0.12)
+
+    # layout, inches: the side and front views at one scale (per_m), the view from above beside them
+    width, fig_h = FIGURE_IN
+    fig = new_figure(width, fig_h, layout=None)
+    fig.set_dpi(GIF_DPI)
+    fig.patch.set_facecolor("white")
+    top_in, bottom_in, gap, left = 0.42, 0.08, 0.22, 0.12
+    panel_h = fig_h - top_in - bottom_in
+    per_m = panel_h / (y_range[1] - y_range[0])
+    side_w, front_w = SIDE_WINDOW_M * per_m, 2 * FRONT_HALF_WIDTH_M * per_m
+    front_left = left + side_w + gap
+    plan_left = front_left + front_w + gap
+    plan_w, plan_bottom = width - plan_left - 0.1, 0.24
+    static = _StaticText()
+    side = _Panel(fig, (left, bottom_in, side_w, panel_h), 0, 1, _FAINT_SIDE,
+                  {n: p for n, p in chains.items() if n != "pelvis"}, ((0.0, SIDE_WINDOW_M), y_range))
+    front = _Panel(fig, (front_left, bottom_in, front_w, panel_h), 2, 1, {}, chains,
+                   ((-FRONT_HALF_WIDTH_M, FRONT_HALF_WIDTH_M), y_range))
+    plan = add_axes_in(fig, plan_left, plan_bottom, plan_w, panel_h - (plan_bottom - bottom_in))
+    for panel in (side, front):
+        panel.head.set_radius(radius)
+    static.add(side.ax.transAxes, (0.0, 1.0), "side", va="bottom")
+    static.add(front.ax.transAxes, (0.0, 1.0), "front (from behind)", va="bottom")
+
+    # side: the ground along the whole walk; its labels move with it (shown only in the window)
+    x_all = np.concatenate([root[:, 0]] + [[f.heel[0], f.toe[0]] for f in prints])
+    metres = _ground(side.ax, float(x_all.min()) - SIDE_WINDOW_M, float(x_all.max()) + SIDE_WINDOW_M, 0.25, 1.0)
+    labels = _MovingLabels(fig, side.ax, metres, [f"{u:.0f} m" for u in metres], -0.085, {"color": "#555555"})
+    side_prints = _footprint_lines(side.ax)
+
+    # front: ground, the feet's lines (where the footprints lie across), the pelvis centre's plumb line
+    for u in _ground(front.ax, -FRONT_HALF_WIDTH_M, FRONT_HALF_WIDTH_M, 0.1, 0.2):
+        if abs(u) < 0.3:
+            static.add(front.ax.transData, (u, -0.085), f"{100 * u:.0f}" + (" cm" if u > 0 else ""),
+                       fontsize=FONT - 1, ha="center", va="top", color="#555555")
+    foot_lines = {}
+    for _, s in SIDES:
+        z = np.array([[f.heel[2], f.toe[2]] for f in prints if f.side == s]).ravel()
+        if z.size:
+            foot_lines[s] = (float(z.min()), float(z.max()))
+            front.ax.plot(foot_lines[s], [0.004, 0.004], color=LEG_COLOURS[s], lw=FOOTPRINT["lw"],
+                          alpha=FOOTPRINT["alpha"], solid_capstyle="butt", zorder=2)
+    plumb = front.ax.add_line(Line2D([], [], color="#333333", lw=0.8, ls=(0, (2, 2)), zorder=6))
+    centre = front.ax.add_line(Line2D([], [], color="#000000", marker="o", ms=3.5, lw=0, zorder=7))
+
+    # from above: the feet's lines, the footprints and the pelvis centre's path, z stretched
+    plan.set_axis_off()
+    plan.set_autoscale_on(False)
+    plan.set_xlim(-PLAN_HALF_WIDTH_M, PLAN_HALF_WIDTH_M)
+    plan.add_patch(Rectangle((0, 0), 1, 1, transform=plan.transAxes, facecolor="#f4f1ec", edgecolor="#bbbbbb",
+                             lw=0.8, zorder=0))
+    stretch = (plan_w / (2 * PLAN_HALF_WIDTH_M)) / per_m
+    static.add(plan.transAxes, (0.0, 1.0), f"from above (z ×{stretch:.0f})", va="bottom")
+    below = blended_transform_factory(plan.transData, plan.transAxes)
+    for z, text in ((-0.1, "-10"), (0.0, "0"), (0.1, "10 cm")):
+        plan.plot([z, z], [0.0, -0.012], transform=below, color="#777777", lw=0.8, clip_on=False)
+        static.add(below, (z, -0.02), text, fontsize=FONT - 1, ha="center", va="top", color="#555555")
+    for s, (z0, z1) in foot_lines.items():
+        plan.axvline(0.5 * (z0 + z1), color=LEG_COLOURS[s], lw=0.6, ls=(0, (4, 3)), alpha=0.8, zorder=1)
+    plan_prints = _footprint_lines(plan)
+    path = plan.add_line(Line2D([], [], color="#000000", lw=1.1, zorder=3))
+    here = plan.add_line(Line2D([], [], color="#000000", marker="o", ms=3.5, lw=0, zorder=4))
+
+    # the title (the only text that changes); the legend in the side view's top right corner, where
+    # the walker (at SIDE_LEAD of the window) never reaches
+    title = fig.text(left / width, 1 - 0.1 / fig_h, "", fontsize=FONT + 2, va="top", ha="left")
+    for k, (text, s) in enumerate((("right leg and arm", "right"), ("left leg and arm (far side)", "left"))):
+        static.add(side.ax.transAxes, (1.0, 0.99 - 0.055 * k), text, va="top", ha="right", color=LEG_COLOURS[s],
+                   fontweight="bold")
+    static.freeze(fig)
+
+    side_segments = {s: [((f.heel[0], 0.004), (f.toe[0], 0.004)) for f in prints if f.side == s] for _, s in SIDES}
+    plan_segments = {s: [((f.heel[2], f.heel[0]), (f.toe[2], f.toe[0])) for f in prints if f.side == s]
+                     for _, s in SIDES}
+    # a foot planted after the last frame (the heel strike that closes the walk, up to 1 / fps
+    # later) shows on the last one
+    planted = {s: np.minimum([f.t for f in prints if f.side == s], times[-1]) for _, s in SIDES}
+    shown = {}
+
+    def frame(i: int) -> None:
+        t, x = times[i], root[i, 0]
+        x0 = x - SIDE_LEAD * SIDE_WINDOW_M
+        side.ax.set_xlim(x0, x0 + SIDE_WINDOW_M)
+        labels.place()
+        side.pose(head, i)
+        front.pose(head, i)
+        plumb.set_data([root[i, 2], root[i, 2]], [0.0, root[i, 1]])
+        centre.set_data([root[i, 2]], [root[i, 1]])
+        for _, s in SIDES:
+            count = int(np.searchsorted(planted[s], t, side="right"))
+            if shown.get(s) != count:
+                shown[s] = count
+                side_prints[s].set_segments(side_segments[s][:count])
+                plan_prints[s].set_segments(plan_segments[s][:count])
+        plan.set_ylim(x - PLAN_BEHIND_M, x + PLAN_AHEAD_M)
+        path.set_data(root[: i + 1, 2], root[: i + 1, 0])
+        here.set_data([root[i, 2]], [x])
+        title.set_text(f"{run.name}   t = {t:5.2f} s")
+
+    return Animation(fig, frame, len(times), [static, labels])
+
+
+@dataclass
+class Animation:
+    """walk.gif before it is drawn: ``frame(i)`` moves ``fig`` to frame ``i`` of ``frames``;
+    :meth:`pixels` draws it."""
+    fig: object
+    frame: object
+    frames: int
+    overlays: list       # drawn over the figure's pixels (blend(rgb)): the pre-rasterised texts
+
+    def pixels(self) -> np.ndarray:
+        """The figure drawn once on its Agg canvas, with the static texts: (h, w, 4) uint8 RGBA
+        (opaque)."""
+        canvas = self.fig.canvas
+        canvas.draw()
+        rgba = np.array(canvas.buffer_rgba())
+        for overlay in self.overlays:
+            overlay.blend(rgba[..., :3])
+        return rgba
+
+
+class _PaletteWriter(PillowWriter):
+    """matplotlib's PillowWriter (Pillow writes the GIF: no ffmpeg), given each frame's pixels
+    (:meth:`Animation.pixels`: one draw, no savefig) as palette images (:class:`_Palette`)."""
+
+    def setup(self, fig, outfile, dpi=None):
+        super().setup(fig, outfile, dpi=dpi)
+        self._palette = None
+
+    def add_frame(self, rgba: np.ndarray) -> None:
+        if self._palette is None:
+            self._palette = _Palette(rgba)
+        self._frames.append(self._palette.image(rgba))
+
+    def grab_frame(self, **savefig_kwargs):
+        raise NotImplementedError("use add_frame(Animation.pixels())")
+
+
+class _Palette:
+    """One palette for every frame: the PALETTE_COLOURS most frequent colours of the first frame,
+    exactly (the background, the ground and the lines keep their colours); any other colour (an
+    antialiased edge) takes its nearest, without dithering (flat colours compress well and nothing
+    flickers). Pillow's own mapping to a given palette is approximate (white came out 252 grey),
+    so the colours are looked up here, each new one once."""
+
+    def __init__(self, rgba: np.ndarray):
+        values, counts = np.unique(self._codes(rgba), return_counts=True)
+        top = values[np.argsort(-counts, kind="stable")[:PALETTE_COLOURS]]
+        self.colours = self._rgb(top)
+        self.lookup = np.full(1 << 24, _UNSEEN, dtype=np.uint8)      # colour code -> palette index (16 MB)
+        self.lookup[top] = np.arange(len(top))
+        padded = np.vstack([self.colours, np.repeat(self.colours[:1], 256 - len(top), axis=0)])
+        self.flat = padded.astype(np.uint8).ravel().tolist()
+
+    @staticmethod
+    def _codes(rgba: np.ndarray) -> np.ndarray:
+        """(h, w, 4) uint8 -> (h, w) int: R + 256 G + 65536 B (the four bytes read as one number)."""
+        return (np.ascontiguousarray(rgba).view("<u4")[..., 0] & 0xFFFFFF).astype(np.intp)
+
+    @staticmethod
+    def _rgb(codes: np.ndarray) -> np.ndarray:
+        return np.column_stack([codes & 255, (codes >> 8) & 255, (codes >> 16) & 255]).astype(np.int32)
+
+    def image(self, rgba: np.ndarray):
+        """``rgba`` (h, w, 4) uint8 (alpha ignored) as a "P" image of this palette."""
+        from PIL import Image
+        codes = self._codes(rgba)
+        index = self.lookup[codes]
+        unseen = index == _UNSEEN
+        if unseen.any():
+            new = np.unique(codes[unseen])
+            distance = ((self._rgb(new)[:, None, :] - self.colours[None, :, :]) ** 2).sum(axis=2)
+            self.lookup[new] = distance.argmin(axis=1)
+            index = self.lookup[codes]
+        image = Image.fromarray(index, "P")
+        image.putpalette(self.flat)
+        return image
+
+
+def write_animation(run, path, fps: float = GIF_FPS) -> Path | None:
+    """Render ``run``'s walk.gif to ``path`` atomically (a temporary file in the same folder, then
+    a rename; the user's normal file mode); None, writing nothing, if it has no body to animate."""
+    if not has_animation_data(run):
+        return None
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    animation = animation_figure(run, fps)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix or ".gif")
+    os.close(fd)
+    try:
+        writer = _PaletteWriter(fps=fps)
+        writer.setup(animation.fig, tmp, dpi=GIF_DPI)
+        for i in range(animation.frames):
+            animation.frame(i)
+            writer.add_frame(animation.pixels())
+        writer.finish()
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
