@@ -1,7 +1,17 @@
-"""Result files are written atomically with the user's normal file mode."""
+"""Result files are written atomically with the user's normal file mode; summary.json and
+dynamics.csv, written out for speed, are what the json and csv modules write."""
+import csv
+import io
+import json
+import math
 import os
 
-from klaw_ocp.io.writers import atomic_write_bytes, atomic_write_text
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from klaw_ocp.io.writers import atomic_write_bytes, atomic_write_text, dynamics_csv, summary_json
+from klaw_ocp.results import COLUMNS
 
 
 def test_files_get_the_users_normal_mode_and_no_temporary_is_left(tmp_path):
@@ -15,3 +25,39 @@ def test_files_get_the_users_normal_mode_and_no_temporary_is_left(tmp_path):
     assert (tmp_path / "a" / "y.png").read_bytes() == b"\x89PNG"
     assert {oct(p.stat().st_mode & 0o777) for p in (tmp_path / "a").iterdir()} == {"0o644"}
     assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["x.csv", "y.png"]
+
+
+
+JSON_VALUES = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False, allow_infinity=False) | st.text(),
+    lambda children: st.lists(children, max_size=4) | st.tuples(children, children)
+    | st.dictionaries(st.text(max_size=6), children, max_size=4), max_leaves=30)
+
+
+@settings(max_examples=300, deadline=None)
+@given(JSON_VALUES)
+def test_summary_json_is_json_dumps_with_an_indent_of_two(value):
+    assert summary_json(value) == json.dumps(value, indent=2, allow_nan=False)
+
+
+def test_summary_json_refuses_what_json_refuses():
+    for bad in ({"x": math.nan}, [math.inf]):
+        with pytest.raises(ValueError):
+            summary_json(bad)
+    assert summary_json({1: [np.float64(0.5)]}) == json.dumps({1: [0.5]}, indent=2)     # keys json converts
+    with pytest.raises(TypeError):
+        summary_json({"x": object()})
+
+
+def test_dynamics_csv_is_what_the_csv_module_writes():
+    rng = np.random.default_rng(3)
+    table = {c: rng.normal(size=5) for c in COLUMNS}
+    table["step"] = np.array([0.0, 0.0, 1.0, 1.0, 2.0])
+    table["subphase"] = np.array(["double_support", "swing1", "swing2", "swing3", "swing1"])
+    table["F_theta3"][0] = math.nan
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(COLUMNS)
+    writer.writerows(zip(*[table[c].tolist() if c == "subphase" else [int(v) for v in table[c]] if c == "step"
+                           else [repr(v) for v in table[c].tolist()] for c in COLUMNS]))
+    assert dynamics_csv(None, table) == buffer.getvalue()

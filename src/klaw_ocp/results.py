@@ -33,65 +33,84 @@ COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4",
            "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 
 
-def _rows_for_step(step, body) -> list[dict]:
-    rows = []
+def hip_offsets(walk) -> list:
+    """The hip less the stance ankle (n, 2) at every node of every subphase of every step
+    ([step][subphase]), in one call of the stance kinematics: each step's stance state rides along
+    in its swing states (a call per step or subphase costs more than the whole walk's hips)."""
+    subs = [sub for step in walk.steps for sub in step.subphases]
+    offsets = stance_hips(walk.spec.body, np.vstack([sub.states[:, :6] for sub in subs]), np.zeros(2))[0]
+    offsets = iter(np.split(offsets, np.cumsum([len(sub.states) for sub in subs])[:-1]))
+    return [[next(offsets) for _ in step.subphases] for step in walk.steps]
+
+
+def walk_hips(walk, offsets: list | None = None) -> list:
+    """The world hip (n, 2) at every node of every subphase of every step ([step][subphase])
+    (``offsets``: the walk's :func:`hip_offsets`, when the caller has them)."""
+    l9 = walk.spec.body.l9
+    return [[np.array([step.origin_x, l9]) + hips for hips in step_offsets]
+            for step, step_offsets in zip(walk.steps, hip_offsets(walk) if offsets is None else offsets)]
+
+
+def _step_columns(step, hips: list) -> dict:
+    """The table's columns (all but hip_y_ref) of one step, its hips from :func:`walk_hips`."""
     stance = step.subphase("stance")
     ds = step.double_support
-    rates3 = np.gradient(ds["theta3"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
-    rates4 = np.gradient(ds["theta4"], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
-
-    ankle = np.array([step.origin_x, body.l9])
-
-    def base(t, name, xs, forces, hip):
-        return {"t": step.t_start + t, "step": step.index, "subphase": name,
-                "w": xs[0], "theta1": xs[1], "theta2": xs[2], "wd": xs[3], "theta1d": xs[4], "theta2d": xs[5],
-                "hip_x": hip[0], "hip_y": hip[1],
-                "F_w": forces[0], "F_theta1": forces[1], "F_theta2": forces[2], "pa": forces[3]}
-
-    # the stance state rides along in the swing states: every hip of the step in one call
-    sizes = [len(sub.states) for sub in step.subphases]
-    all_hips = np.split(stance_hips(body, np.vstack([sub.states[:, :6] for sub in step.subphases]), ankle)[0],
-                        np.cumsum(sizes)[:-1])
-    stance_hip_xy = all_hips[0]
-    for k in range(len(ds["t"]) - 1):          # the toe-off node opens swing1
-        row = base(ds["t"][k], "double_support", stance.states[k], stance.forces[k], stance_hip_xy[k])
-        row.update(theta3=ds["theta3"][k], theta4=ds["theta4"][k], theta3d=rates3[k], theta4d=rates4[k],
-                   F_theta3=float("nan"), F_theta4=float("nan"))
-        rows.append(row)
-    for sub, hips in zip(step.subphases[1:], all_hips[1:]):
-        for k in range(len(sub.t)):
-            if sub.name != "swing1" and k == 0:
-                continue                          # same instant as the previous subphase's end
-            x, f = sub.states[k], sub.forces[k]
-            row = base(sub.t[k], sub.name, x, f, hips[k])
-            if sub.name == "swing1":
-                row.update(theta3=x[6], theta4=x[7], theta3d=x[8], theta4d=float("nan"))
-            elif sub.name == "swing2":
-                row.update(theta3=x[6], theta4=x[7], theta3d=x[8], theta4d=x[9])
-            else:
-                row.update(theta3=x[6], theta4=0.0, theta3d=x[7], theta4d=0.0)
-            row.update(F_theta3=f[4], F_theta4=f[5])
-            rows.append(row)
-    # swing1 knee rate: the kinematic drive, by finite differences of theta4
-    s1 = [r for r in rows if r["subphase"] == "swing1"]
-    if len(s1) > 1:
-        rates = np.gradient([r["theta4"] for r in s1], [r["t"] for r in s1])
-        for r, v in zip(s1, rates):
-            r["theta4d"] = float(v)
-    for r, y in zip(rows, hip_reference_curve(step, body, np.array([r["t"] for r in rows]))):
-        r["hip_y_ref"] = y
-    return rows
+    n = max(len(ds["t"]) - 1, 0)                # the toe-off node opens swing1
+    rates = [np.gradient(ds[c], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
+             for c in ("theta3", "theta4")]
+    nan = np.full(n, np.nan)
+    # per subphase: name, t, states, forces, hips, theta3, theta4, theta3d, theta4d, F_theta3, F_theta4
+    parts = [("double_support", ds["t"][:n], stance.states[:n, :6], stance.forces[:n, :4], hips[0][:n],
+              ds["theta3"][:n], ds["theta4"][:n], rates[0][:n], rates[1][:n], nan, nan)]
+    for sub, sub_hips in zip(step.subphases[1:], hips[1:]):
+        k = 0 if sub.name == "swing1" else 1     # else the same instant as the previous subphase's end
+        x, f, t = sub.states[k:], sub.forces[k:], sub.t[k:]
+        if sub.name == "swing1":
+            # the knee rate: the kinematic drive, by finite differences of theta4
+            rate = np.gradient(x[:, 7], step.t_start + t) if len(t) > 1 else np.full(len(t), np.nan)
+            angles = (x[:, 6], x[:, 7], x[:, 8], rate)
+        elif sub.name == "swing2":
+            angles = (x[:, 6], x[:, 7], x[:, 8], x[:, 9])
+        else:
+            zero = np.zeros(len(t))
+            angles = (x[:, 6], zero, x[:, 7], zero)
+        parts.append((sub.name, t, x[:, :6], f[:, :4], sub_hips[k:], *angles, f[:, 4], f[:, 5]))
+    joined = lambda i: np.concatenate([p[i] for p in parts])
+    x, f, hip = joined(2), joined(3), joined(4)
+    t = step.t_start + joined(1)
+    columns = {"t": t, "step": np.full(len(t), float(step.index)),
+               "w": x[:, 0], "theta1": x[:, 1], "theta2": x[:, 2], "wd": x[:, 3], "theta1d": x[:, 4],
+               "theta2d": x[:, 5], "hip_x": hip[:, 0], "hip_y": hip[:, 1],
+               "F_w": f[:, 0], "F_theta1": f[:, 1], "F_theta2": f[:, 2], "pa": f[:, 3]}
+    columns.update(zip(("theta3", "theta4", "theta3d", "theta4d", "F_theta3", "F_theta4"),
+                       map(joined, range(5, 11))))
+    columns["subphase"] = [name for p in parts for name in [p[0]] * len(p[1])]
+    return columns
 
 
 def hip_reference_curve(step, body, t_world: np.ndarray) -> np.ndarray:
     """The hip-height sinusoid of ``step`` (§4.2) at walk times ``t_world``, world y (m); NaN for a
     step solved without one (a result from before it was recorded)."""
-    ref = step.hip_reference
-    if not ref:
-        return np.full(len(t_world), np.nan)
-    y, _ = hip_height_reference(ca.DM(np.asarray(t_world, float) - step.t_start), step.plan.timings.t_step,
-                                ref["y_start"], ref["y_end"], ref["excursion"])
-    return np.asarray(y, float).ravel() + body.l9
+    return _hip_reference_curves([step], body, [np.asarray(t_world, float)])[0]
+
+
+def _hip_reference_curves(steps, body, times: list) -> list:
+    """:func:`hip_reference_curve` of each of ``steps`` at its walk times (one CasADi evaluation
+    for them all: one per step costs more than the values)."""
+    ref = [bool(step.hip_reference) for step in steps]
+    out = [np.full(len(t), np.nan) for t in times]
+    if not any(ref):
+        return out
+    sizes = [len(t) for t, r in zip(times, ref) if r]
+    per_row = lambda f: ca.DM(np.repeat([f(step) for step, r in zip(steps, ref) if r], sizes))
+    t_local = np.concatenate([np.asarray(t, float) - step.t_start for step, t, r in zip(steps, times, ref) if r])
+    shape = (per_row(lambda s, k=k: s.hip_reference[k]) for k in ("y_start", "y_end", "excursion"))
+    y, _ = hip_height_reference(ca.DM(t_local), per_row(lambda s: s.plan.timings.t_step), *shape)
+    values = iter(np.split(np.asarray(y, float).ravel() + body.l9, np.cumsum(sizes)[:-1]))
+    for i, r in enumerate(ref):
+        if r:
+            out[i] = next(values)
+    return out
 
 
 def stance_leg(index: int) -> str:
@@ -101,9 +120,12 @@ def stance_leg(index: int) -> str:
 
 def walk_table(walk) -> dict:
     """Column name -> array (``subphase`` is an array of str)."""
-    rows = [r for step in walk.steps for r in _rows_for_step(step, walk.spec.body)]
-    return {c: np.array([r[c] for r in rows]) if c == "subphase" else np.array([r[c] for r in rows], float)
-            for c in COLUMNS}
+    steps = [_step_columns(step, hips) for step, hips in zip(walk.steps, walk_hips(walk))]
+    references = _hip_reference_curves(walk.steps, walk.spec.body, [columns["t"] for columns in steps])
+    for columns, y in zip(steps, references):
+        columns["hip_y_ref"] = y
+    return {c: np.array([v for columns in steps for v in columns[c]]) if c == "subphase" else
+            np.concatenate([columns[c] for columns in steps]).astype(float) for c in COLUMNS}
 
 
 def _finite(value):
@@ -111,26 +133,30 @@ def _finite(value):
     return value if math.isfinite(value) else None
 
 
-def hip_dip(body, stance) -> float:
+def hip_dip(body, stance, offsets: np.ndarray | None = None) -> float:
     """How far the hip goes below the lower of its step's two heel-strike heights (0 if never):
     §4's "never … below its minimal value at heel strike", a hard constraint only in the
-    tracking stance."""
-    y = stance_hips(body, stance.states, np.zeros(2))[0][:, 1]
+    tracking stance (``offsets``: the stance's :func:`hip_offsets`, when the caller has them)."""
+    y = (stance_hips(body, stance.states, np.zeros(2))[0] if offsets is None else offsets)[:, 1]
     return float(max(0.0, min(y[0], y[-1]) - y.min()))
 
 
-def swing_foot_clearance(body, step) -> dict:
+def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     """The swing foot's lowest toe tip and heel (m above the ground) at the swing's samples
     between toe-off and heel strike (both ends excluded: there the toe, then the heel, touch the
     ground by definition), and its lowest toe in swing2 (the mid-swing toe clearance that
     ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py), on the leg
-    interpolated linearly between the samples."""
-    origin = np.array([step.origin_x, body.l9])
-    subs = [step.subphase(name) for name in ("swing1", "swing2", "swing3")]
+    interpolated linearly between the samples (``hips``: the step's :func:`walk_hips`, when the
+    caller has them)."""
+    names = ("swing1", "swing2", "swing3")
+    subs = [step.subphase(name) for name in names]
     t = np.concatenate([sub.t for sub in subs])
     x = np.vstack([sub.states[:, :7] for sub in subs])
     theta4 = np.concatenate([sub.states[:, 7] if sub.name != "swing3" else np.zeros(len(sub.t)) for sub in subs])
-    hips = stance_hips(body, x[:, :6], origin)[0]
+    if hips is None:
+        hips = stance_hips(body, x[:, :6], np.array([step.origin_x, body.l9]))[0]
+    else:
+        hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
     shank = x[:, 6] + theta4
     ankle_y = hips[:, 1] - body.l3 * np.cos(x[:, 6]) - body.l4 * np.cos(shank)
     theta5, theta6 = step.swing_foot.grounded_angles(
@@ -167,12 +193,14 @@ def walk_summary(walk, table: dict | None = None) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results
     (``table``: the walk's :func:`walk_table`, when the caller has it already)."""
     steps = []
-    for step in walk.steps:
+    offsets = hip_offsets(walk) if walk.steps else []
+    for step, step_offsets, hips in zip(walk.steps, offsets, walk_hips(walk, offsets)):
+        stance = [sub.name for sub in step.subphases].index("stance")
         entry = step.plan.as_dict()
         entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                      hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
-                     hip_dip_m=hip_dip(walk.spec.body, step.subphase("stance")), notes=list(step.notes),
-                     swing_foot=swing_foot_clearance(walk.spec.body, step),
+                     hip_dip_m=hip_dip(walk.spec.body, step.subphases[stance], step_offsets[stance]),
+                     notes=list(step.notes), swing_foot=swing_foot_clearance(walk.spec.body, step, hips),
                      curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
         if step.hip_reference:
             l9, ref = walk.spec.body.l9, step.hip_reference

@@ -11,8 +11,10 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import tempfile
+from json.encoder import encode_basestring_ascii as encode_string
 from pathlib import Path
 
 import numpy as np
@@ -58,15 +60,13 @@ def atomic_write_text(path: Path, text: str) -> None:
 def dynamics_csv(walk, table: dict | None = None) -> str:
     if table is None:
         table = walk_table(walk) if walk.steps else {c: np.array([]) for c in COLUMNS}
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    # whole columns to Python values first: indexing numpy cell by cell costs more than the walk
+    # whole columns to text first (indexing numpy cell by cell costs more than the walk), then
+    # joined: no cell needs the csv module's quoting (numbers and subphase names), and it takes
+    # half the time of csv.writer
     columns = [table[c].tolist() if c == "subphase" else
-               [int(v) for v in table[c].tolist()] if c == "step" else list(map(repr, table[c].tolist()))
+               [str(int(v)) for v in table[c].tolist()] if c == "step" else list(map(repr, table[c].tolist()))
                for c in COLUMNS]
-    writer.writerows(zip(*columns))
-    return buffer.getvalue()
+    return "\n".join(map(",".join, [COLUMNS, *zip(*columns)])) + "\n"
 
 
 def render_walk(walk, fps: float | None = None) -> dict:
@@ -114,8 +114,36 @@ def events_csv(summary: dict) -> str:
     return buffer.getvalue()
 
 
+def summary_json(summary: dict) -> str:
+    """``json.dumps(summary, indent=2, allow_nan=False)``, byte for byte, in a third of its time
+    (with an indent, the json module encodes in pure Python, one generator per container): the
+    JSON types a summary holds, written out; anything else goes to the json module."""
+    def encode(value, pad: str) -> str:
+        if isinstance(value, str):
+            return encode_string(value)
+        if value is None or value is True or value is False:
+            return {None: "null", True: "true", False: "false"}[value]
+        if isinstance(value, int):
+            return int.__repr__(value)
+        if isinstance(value, float):
+            if not math.isfinite(value):
+                raise ValueError(f"Out of range float values are not JSON compliant: {value!r}")
+            return float.__repr__(value)
+        inner = pad + "  "
+        if isinstance(value, dict) and all(isinstance(k, str) for k in value):
+            items = (f"{inner}{encode_string(k)}: {encode(v, inner)}" for k, v in value.items())
+            return "{\n" + ",\n".join(items) + f"\n{pad}}}" if value else "{}"
+        if isinstance(value, (list, tuple)):
+            return "[\n" + ",\n".join(inner + encode(v, inner) for v in value) + f"\n{pad}]" if value else "[]"
+        raise TypeError
+    try:
+        return encode(summary, "")
+    except TypeError:
+        return json.dumps(summary, indent=2, allow_nan=False)
+
+
 def _render(summary: dict, table_csv: str) -> dict:
-    text = json.dumps(summary, indent=2, allow_nan=False) + "\n"
+    text = summary_json(summary) + "\n"
     return {"dynamics": ("dynamics.csv", table_csv.encode("utf-8")),
             "summary": ("summary.json", text.encode("utf-8")),
             "events": ("events.csv", events_csv(summary).encode("utf-8"))}

@@ -170,25 +170,25 @@ def swing_legs(walk, samples: Samples, rows: np.ndarray, simulated_hip: np.ndarr
     step, tau = samples.step[rows], samples.tau[rows]
     swing, stance = swing_curves(walk), stance_curves(walk)
 
-    def planar_leg(k, times, hip):
-        """The planar model's swing leg of step k at its times: shank angle and ankle (m)."""
-        theta3, theta4 = swing(np.full(len(times), k), times).T
+    def planar_leg(step, times, hip):
+        """The planar model's swing leg of steps ``step`` at their times: shank angle and ankle (m)."""
+        theta3, theta4 = swing(step, times).T
         shank = theta3 + theta4
         knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
         return shank, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
-
-    def ankle_and_shank(k):
-        def leg(times):
-            hip, _ = stance_at(walk, stance, np.full(len(times), k), times)
-            shank, ankle = planar_leg(k, times, hip)
-            return ankle[:, 1], shank
-        return leg
-    shank, ankle = np.empty(len(rows)), np.empty((len(rows), 2))
+    shank, ankle = planar_leg(step, tau, simulated_hip)
+    # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
+    # one pass (a pass per step costs mostly numpy's fixed overheads)
+    swinging = np.unique(step)
+    grids = [steps[k].swing_foot.guard_grid() for k in swinging]
+    grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
+    grid_shank, grid_ankle = planar_leg(grid_step, grid_t, stance_at(walk, stance, grid_step, grid_t)[0])
+    ends = np.cumsum([len(g) for g in grids])
     theta5, theta6 = np.empty(len(rows)), np.empty(len(rows))
-    for k in np.unique(step):
-        mine = step == k
-        shank[mine], ankle[mine] = planar_leg(k, tau[mine], simulated_hip[mine])
-        theta5[mine], theta6[mine] = steps[k].swing_foot.grounded_angles(body, tau[mine], ankle_and_shank(k))
+    for k, grid, end in zip(swinging, grids, ends):
+        mine, on_grid = step == k, slice(end - len(grid), end)
+        theta5[mine], theta6[mine] = steps[k].swing_foot.grounded_angles_on_grid(
+            body, tau[mine], grid, grid_ankle[on_grid, 1], grid_shank[on_grid])
     heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
     _, _, knee = leg_ik(body, hip, ankle)
     return {"hip": hip, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}

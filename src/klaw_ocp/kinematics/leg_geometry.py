@@ -4,11 +4,17 @@ toe tip. :mod:`.virtual_leg` puts them together with the foot periods' rules.
 
 Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles in radians. Pitch
 ``p`` is the foot's heel-up rotation (clockwise), negative while it rotates toe-up about the heel.
+
+The walk asks for these at a few to a few dozen samples at a time, thousands of times a walk, so
+numpy's fixed cost per call, not the arithmetic, is what they cost: the foot's constant points
+are computed once per body (:func:`foot_pieces`) and each function uses as few array operations
+as it can.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -22,14 +28,23 @@ def _rotate(points: np.ndarray, pivot: np.ndarray, angle) -> np.ndarray:
     return pivot + np.column_stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]])
 
 
+def _points(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(n, 2) from x and y (n,): cheaper than np.column_stack for the few samples asked at a time."""
+    out = np.empty((len(x), 2))
+    out[:, 0], out[:, 1] = x, y
+    return out
+
+
 def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Thigh angle θ3, knee flexion θ4 (swing-model convention: knee = hip - l3 (sin θ3, cos θ3))
-    and the knee, of the two-segment leg from ``hip`` to ``ankle`` (n, 2), knee forward. The
-    distance is clipped to l1 (the leg straight): :attr:`VirtualLegFrames.overreach` says by how much."""
-    d_vec = ankle - hip
+    and the knee, of the two-segment leg from ``hip`` (n, 2) to ``ankle`` (n, 2) or (2,), knee
+    forward. The distance is clipped to l1 (the leg straight): :attr:`VirtualLegFrames.overreach`
+    says by how much."""
+    hx, hy = hip[:, 0], hip[:, 1]
+    dx, dy = ankle[..., 0] - hx, ankle[..., 1] - hy
     l3, l4 = body.l3, body.l4
-    d = np.minimum(np.hypot(d_vec[:, 0], d_vec[:, 1]), l3 + l4)
-    beta = np.arctan2(-d_vec[:, 0], -d_vec[:, 1])
+    d = np.minimum(np.hypot(dx, dy), l3 + l4)
+    beta = np.arctan2(-dx, -dy)
     # the triangle's half-angle formulas: well conditioned at the straight knee, where arccos of
     # the cosine law loses half the digits (1e-8 rad, 1e-8 m of hip)
     s = (l3 + l4 + d) / 2
@@ -38,47 +53,43 @@ def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, 
     delta = 2 * np.arctan2(root((s - l3) * short), root(s * (s - l4)))     # at the hip
     theta4 = 2 * np.arctan2(root(s * short), root((s - l3) * (s - l4)))     # knee flexion
     theta3 = beta - delta
-    knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+    knee = _points(hx - l3 * np.sin(theta3), hy - l3 * np.cos(theta3))
     return theta3, theta4, knee
+
+
+def _readonly(values) -> np.ndarray:
+    array = np.array(values, float)
+    array.flags.writeable = False       # cached and shared: nobody may change it
+    return array
 
 
 @dataclass(frozen=True)
 class FlatFoot:
-    """The stance foot's points lying flat, its flat-foot ankle at (ankle_x, l9)."""
+    """The stance foot's points lying flat, its flat-foot ankle at (ankle_x, l9); computed once
+    (read-only arrays)."""
     body: Body
     ankle_x: float
 
-    @property
-    def ankle(self):
-        return np.array([self.ankle_x, self.body.l9])
+    @cached_property
+    def ankle(self) -> np.ndarray:
+        return _readonly([self.ankle_x, self.body.l9])
 
-    @property
-    def heel(self):
-        return np.array([self.ankle_x - self.body.l8, 0.0])
+    @cached_property
+    def heel(self) -> np.ndarray:
+        return _readonly([self.ankle_x - self.body.l8, 0.0])
 
-    @property
-    def metatarsal(self):
-        return np.array([self.ankle_x + math.sqrt(self.body.l12 ** 2 - self.body.l9 ** 2), 0.0])
+    @cached_property
+    def metatarsal(self) -> np.ndarray:
+        return _readonly([self.ankle_x + math.sqrt(self.body.l12 ** 2 - self.body.l9 ** 2), 0.0])
 
-    @property
-    def toe(self):
-        return self.metatarsal + np.array([self.body.l13, 0.0])
+    @cached_property
+    def toe(self) -> np.ndarray:
+        return _readonly(self.metatarsal + np.array([self.body.l13, 0.0]))
 
     def ankle_at(self, pitch, meta_off_theta6: float) -> np.ndarray:
-        """The ankle alone at foot pitch ``pitch`` (n,), the pivots of :meth:`pose`: written out,
-        for the root searches, which ask for it thousands of times a walk."""
+        """The ankle alone at foot pitch ``pitch`` (n,), as in :meth:`pose`."""
         p = np.atleast_1d(np.asarray(pitch, float))
-        q = meta_off_theta6
-        heel, ankle0, meta, toe = self.heel, self.ankle, self.metatarsal, self.toe
-        c, s = math.cos(q), math.sin(q)
-        v = ankle0 - meta
-        ankle_q = meta + np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1]])   # turned by -q about M
-        pivot = np.where((p < 0)[:, None], heel, np.where((p <= q)[:, None], meta, toe))
-        start = np.where((p <= q)[:, None], ankle0, ankle_q)
-        turn = np.where(p <= q, -p, -(p - q))
-        d = start - pivot
-        ct, st = np.cos(turn), np.sin(turn)
-        return pivot + np.column_stack([ct * d[:, 0] - st * d[:, 1], st * d[:, 0] + ct * d[:, 1]])
+        return foot_pieces(self.body, meta_off_theta6).turned(self.ankle_x, p, ANKLE)[:, 0]
 
     def pose(self, pitch, meta_off_theta6: float, rocker_theta6=0.0) -> dict:
         """Heel, ankle, metatarsal head, toe tip (n, 2), θ6 and the sole's counter-clockwise angle
@@ -86,39 +97,63 @@ class FlatFoot:
         ``rocker_theta6``), about the metatarsal head for 0 <= p <= meta_off_theta6 (toe flat:
         θ6 = p), about the toe tip beyond (θ6 held at meta_off_theta6)."""
         p = np.atleast_1d(np.asarray(pitch, float))
-        n = p.size
-        rest = {k: np.tile(getattr(self, k), (n, 1)) for k in ("heel", "ankle", "metatarsal", "toe")}
         q = meta_off_theta6
-        rocker, about_m = p < 0, p >= 0
-        out = {k: v.copy() for k, v in rest.items()}
-        # toe-up about the heel: the whole foot turns; the toe keeps its angle to the foot
-        sigma = np.where(rocker, -p, 0.0)
-        out["metatarsal"] = np.where(rocker[:, None], _rotate(rest["metatarsal"], self.heel, sigma),
-                                     out["metatarsal"])
-        theta6 = np.where(rocker, np.broadcast_to(rocker_theta6, (n,)), np.minimum(p, q))
-        forward = np.column_stack([np.cos(sigma + theta6), np.sin(sigma + theta6)])
-        out["toe"] = np.where(rocker[:, None], out["metatarsal"] + self.body.l13 * forward, out["toe"])
-        # heel up about the metatarsal head, then about the toe tip
-        first = np.where(about_m, -np.minimum(p, q), 0.0)
-        second = np.where(p > q, -(p - q), 0.0)
-        turned = _rotate(_rotate(rest["heel"], self.metatarsal, first), self.toe, second)
-        out["heel"] = np.where(about_m[:, None], turned, out["heel"])
-        out["ankle"] = self.ankle_at(p, q)
-        out["metatarsal"] = np.where(about_m[:, None], _rotate(rest["metatarsal"], self.toe, second),
-                                     out["metatarsal"])
-        out["theta6"] = theta6
-        out["sole"] = np.where(rocker, sigma, -p)
+        heel, ankle, metatarsal = np.moveaxis(foot_pieces(self.body, q).turned(self.ankle_x, p), 1, 0)
+        rocker = p < 0
+        theta6 = np.where(rocker, rocker_theta6, np.minimum(p, q))
+        toe = np.broadcast_to(self.toe, (len(p), 2)).copy()     # on the ground unless rocking
+        if rocker.any():   # toe-up about the heel: the whole foot turns; the toe keeps its angle to the foot
+            forward = theta6[rocker] - p[rocker]
+            toe[rocker] = metatarsal[rocker] + self.body.l13 * _points(np.cos(forward), np.sin(forward))
+        return {"heel": heel, "ankle": ankle, "metatarsal": metatarsal, "toe": toe, "theta6": theta6, "sole": -p}
+
+
+#: the points of :class:`FootPieces`, in its order
+HEEL, ANKLE, METATARSAL = slice(0, 1), slice(1, 2), slice(2, 3)
+
+
+@dataclass(frozen=True)
+class FootPieces:
+    """A flat foot's three rigid motions, its ankle at x = 0: toe-up about the heel (p < 0),
+    heel-up about the first metatarsal head (0 <= p <= meta-off q), about the toe tip beyond.
+    Each piece's pivot (3, 2), the pitch it starts at (3,), and the heel, ankle and metatarsal head
+    there less the pivot (3 pieces, 3 points, 2). At pitch p every point is turned
+    counter-clockwise by p0 - p about its piece's pivot from where it was at p0."""
+    q: float
+    pivot: np.ndarray
+    p0: np.ndarray
+    offsets: np.ndarray
+
+    def turned(self, ankle_x: float, p: np.ndarray, points=slice(None)) -> np.ndarray:
+        """The foot's ``points`` (n, len(points), 2) at pitches ``p`` (n,), its flat ankle at
+        ``ankle_x``."""
+        k = (p >= 0).astype(np.intp) + (p > self.q)              # the piece
+        turn = (self.p0[k] - p)[:, None]
+        c, s = np.cos(turn), np.sin(turn)
+        pivot, v = self.pivot[k], self.offsets[k, points]
+        out = np.empty(v.shape)
+        out[..., 0] = (pivot[:, 0, None] + ankle_x) + (c * v[..., 0] - s * v[..., 1])
+        out[..., 1] = pivot[:, 1, None] + (s * v[..., 0] + c * v[..., 1])
         return out
 
 
+@lru_cache(maxsize=64)
+def foot_pieces(body: Body, meta_off_theta6: float) -> FootPieces:
+    """:class:`FootPieces` of the body's foot whose toe stops turning at ``meta_off_theta6``
+    (computed once: every pitch asks for them)."""
+    q, foot = meta_off_theta6, FlatFoot(body, 0.0)
+    heel, ankle, meta, toe = foot.heel, foot.ankle, foot.metatarsal, foot.toe
+    at_q = _rotate(np.array([heel, ankle]), meta, np.full(2, -q))      # the heel and ankle at meta-off
+    pivot = np.array([heel, meta, toe])
+    points = np.array([[heel, ankle, meta], [heel, ankle, meta], [at_q[0], at_q[1], meta]])
+    return FootPieces(q, _readonly(pivot), _readonly([0.0, 0.0, q]), _readonly(points - pivot[:, None]))
+
+
 def ankle_angle(theta3, theta4, sole) -> np.ndarray:
-    """θ5: from the shank's upward axis (absolute angle φ = θ3 + θ4) counter-clockwise to the
-    backward sole direction (the sole turned counter-clockwise by ``sole`` from flat)."""
-    phi = theta3 + theta4
-    up = np.column_stack([np.sin(phi), np.cos(phi)])
-    back = np.column_stack([-np.cos(sole), -np.sin(sole)])
-    cross = up[:, 0] * back[:, 1] - up[:, 1] * back[:, 0]
-    return np.mod(np.arctan2(cross, np.sum(up * back, axis=1)), 2 * math.pi)
+    """θ5: from the shank's upward axis (absolute angle φ = θ3 + θ4 clockwise from the vertical,
+    so π/2 - φ counter-clockwise from x) counter-clockwise to the backward sole direction (the sole
+    turned counter-clockwise by ``sole`` from flat: sole + π), in [0, 2π)."""
+    return np.mod(np.asarray(sole) + theta3 + theta4 + math.pi / 2, 2 * math.pi)
 
 
 def smoothstep(u):

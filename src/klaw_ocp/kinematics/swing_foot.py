@@ -31,7 +31,7 @@ toe segment's angle to the foot (> 0 toe up). Times are the step's own (0 at its
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -61,6 +61,11 @@ def schedule_angles(t, s: dict, clip):
     return theta5, theta6
 
 
+def _clip(x, lo, hi):
+    """np.clip as two ufuncs: np.clip's fixed overhead is most of its time on a swing's samples."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
 def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray, np.ndarray]:
     """Heights above the ground (m) of the heel and the toe tip of a foot whose ankle is at height
     ``ankle_y`` (the foot of :func:`klaw_ocp.dynamics.foot_points_sx`, vectorised)."""
@@ -69,6 +74,27 @@ def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray
     heel = ankle_y + body.l8 * np.sin(alpha) + body.l9 * np.cos(alpha)
     toe = ankle_y - reach * np.sin(alpha) + body.l9 * np.cos(alpha) - body.l13 * np.sin(alpha + theta6)
     return heel, toe
+
+
+def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`SwingFoot.ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
+    # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
+    # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
+    reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+    heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
+    toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
+    toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
+    lower, upper = np.full(theta5.shape, -np.inf), np.full(theta5.shape, np.inf)
+    fits = np.ones(theta5.shape, bool)
+    for radius, phase in (heel, toe):
+        centre = math.pi / 2 - phase
+        centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
+        half = np.arccos(_clip(-ankle_y / radius, -1.0, 1.0))
+        fits &= np.abs(math.pi - centre) <= half
+        lower, upper = np.maximum(lower, centre - half), np.minimum(upper, centre + half)
+    to_theta5 = shank - math.pi / 2
+    level = math.pi + to_theta5
+    return np.where(fits, _clip(theta5, lower + to_theta5, upper + to_theta5), level), theta6
 
 
 @dataclass(frozen=True)
@@ -87,7 +113,8 @@ class SwingFoot:
     def angles(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
         t = np.asarray(t, float)
-        theta5, theta6 = schedule_angles(t, asdict(self), np.clip)
+        # the fields by name (dataclasses.asdict deep-copies: most of this method's time)
+        theta5, theta6 = schedule_angles(t, {name: getattr(self, name) for name in SCHEDULE_FIELDS}, _clip)
         return np.broadcast_to(theta5, t.shape).copy(), np.broadcast_to(theta6, t.shape).copy()
 
     def ground_limits(self, body, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
@@ -98,25 +125,8 @@ class SwingFoot:
         ground limits can leave two ranges; this one moves continuously with the leg). Below l9 no
         foot fits, and the sole is level, the least deep."""
         t = np.asarray(t, float)
-        theta5, theta6 = self.angles(t)
-        ankle_y, shank = np.broadcast_to(ankle_y, t.shape), np.broadcast_to(shank_angle, t.shape)
-        # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
-        # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
-        reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
-        heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
-        toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
-        toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
-        lower, upper = np.full(t.shape, -np.inf), np.full(t.shape, np.inf)
-        fits = np.ones(t.shape, bool)
-        for radius, phase in (heel, toe):
-            centre = math.pi / 2 - phase
-            centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
-            half = np.arccos(np.clip(-ankle_y / radius, -1.0, 1.0))
-            fits &= np.abs(math.pi - centre) <= half
-            lower, upper = np.maximum(lower, centre - half), np.minimum(upper, centre + half)
-        to_theta5 = shank - math.pi / 2
-        level = math.pi + to_theta5
-        return np.where(fits, np.clip(theta5, lower + to_theta5, upper + to_theta5), level), theta6
+        return _ground_clip(body, *self.angles(t), np.broadcast_to(ankle_y, t.shape),
+                            np.broadcast_to(shank_angle, t.shape))
 
     def grounded_angles(self, body, t, leg) -> tuple[np.ndarray, np.ndarray]:
         """θ5 and θ6 of the foot the body shows at step-local times ``t`` in the swing (n,), for
@@ -133,18 +143,39 @@ class SwingFoot:
         fraction of a millimetre; a heel that comes up to its landing point from below the ground
         (the straight leg of swing3 too low: first steps from rest, closing steps) stays below it
         in the last moments of the swing."""
-        t = np.asarray(t, float)
+        grid = self.guard_grid()
+        return self.grounded_angles_on_grid(body, t, grid, *leg(grid))
+
+    def guard_grid(self) -> np.ndarray:
+        """The swing's times at which :meth:`grounded_angles` asks for the leg (GUARD_GRID apart)."""
         n = max(int(math.ceil((self.t_heel_strike - self.t_toe_off) / GUARD_GRID)), 1) + 1
-        grid = np.linspace(self.t_toe_off, self.t_heel_strike, n)
-        scheduled, _ = self.angles(grid)
-        required = self.ground_limits(body, grid, *leg(grid))[0] - scheduled
-        turn = np.zeros(n)
-        # the foot leaves and lands as the stance foot has it: no turn at toe-off and heel strike
-        ends = GUARD_RATE * np.minimum(grid - grid[0], grid[-1] - grid)
-        for sign in (1.0, -1.0):                     # dorsiflexion (toe), plantarflexion (heel)
-            part = np.maximum(sign * required, 0.0)
-            if part.any():
-                cone = part[None, :] - GUARD_RATE * np.abs(grid[:, None] - grid[None, :])
-                turn += sign * np.minimum(cone.max(axis=1), ends)
-        theta5, theta6 = self.angles(t)
-        return theta5 + np.interp(t, grid, turn), theta6
+        return np.linspace(self.t_toe_off, self.t_heel_strike, n)
+
+    def grounded_angles_on_grid(self, body, t, grid, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`grounded_angles` with the leg's ankle height and shank angle at the times
+        :meth:`guard_grid` given (the body evaluates every step's grid in one pass)."""
+        t = np.asarray(t, float)
+        theta5, theta6 = self.angles(np.concatenate([grid, t]))     # the grid's and t's in one call
+        scheduled, n = theta5[:len(grid)], len(grid)
+        required = _ground_clip(body, scheduled, theta6[:n], ankle_y, shank)[0] - scheduled
+        return theta5[n:] + np.interp(t, grid, rate_limited_turn(grid, required)), theta6[n:]
+
+
+def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:
+    """The least turn (rad) at the times ``grid`` (increasing) that is at least ``required`` where
+    that is positive and at most it where negative, changes by at most ``rate`` (rad/s) and is 0 at
+    both ends (the foot leaves and lands as the stance foot has it): the cone envelope
+    max_j(part_j - rate |t_i - t_j|) of each sign's part, capped by the ends' cones."""
+    turn = np.zeros(len(grid))
+    since = grid - grid[0]
+    ends = rate * np.minimum(since, since[-1] - since)
+    slope = rate * since
+    for sign in (1.0, -1.0):                     # dorsiflexion (toe), plantarflexion (heel)
+        part = np.maximum(sign * required, 0.0)
+        if part.any():
+            # the envelope as the larger of the running maxima from the left and from the right:
+            # O(n), not an n x n matrix
+            left = np.maximum.accumulate(part + slope) - slope
+            right = np.maximum.accumulate((part - slope)[::-1])[::-1] + slope
+            turn += sign * np.minimum(np.maximum(left, right), ends)
+    return turn

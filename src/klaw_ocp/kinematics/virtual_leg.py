@@ -30,19 +30,19 @@ Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..body import Body
+from . import heel_up_roots
 from .leg_geometry import FlatFoot, ankle_angle, leg_ik, smoothstep
 
 #: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
 #: flexion): a fully straight knee is a singular point of the inverse kinematics.
 REACH_FRACTION = 1 - 1e-3
-#: The steepest foot the rules consider (rad): the foot stands almost on its toe.
-MAX_PITCH = math.radians(89)
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
+_PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch > meta-off)
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,8 @@ class StanceFoot:
     #: the heel does not come down again once it is off
     single_t: tuple = ()
     single_pitch: tuple = ()
+    #: :meth:`pitch_at_other_heel_strike` by hip: the step asks for it twice (toe-off, double support)
+    _start_pitches: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float,
@@ -102,24 +104,26 @@ class StanceFoot:
         the hip-ankle distance starts still: with the leg straight at heel strike, any shortening
         rate would bend the knee as the square root of time, an infinite knee rate (23° in the
         first frame at 30 fps)."""
-        foot = FlatFoot(body, ankle_x)
-        heel, ankle0 = foot.heel, foot.ankle
-        r_heel = float(np.hypot(*(ankle0 - heel)))
-        to_hip = np.asarray(hip, float) - heel
-        dist = float(np.hypot(*to_hip))
+        # in plain floats: numpy's overhead on two-vectors is most of the cost
+        heel_x, ankle0_x, ankle0_y = ankle_x - body.l8, ankle_x, body.l9
+        hip_x, hip_y = (float(v) for v in hip)
+        r_heel = math.hypot(ankle0_x - heel_x, ankle0_y)
+        to_x, to_y = hip_x - heel_x, hip_y
+        dist = math.hypot(to_x, to_y)
         # the circles |A - hip| = l1 and |A - heel| = r_heel: the intersection ahead of the heel
         along = (dist ** 2 + r_heel ** 2 - body.l1 ** 2) / (2 * dist)
         across = math.sqrt(max(r_heel ** 2 - along ** 2, 0.0))
-        e = to_hip / dist
-        ankle = heel + along * e + across * np.array([e[1], -e[0]])
-        sole_up = math.atan2(ankle[1] - heel[1], ankle[0] - heel[0]) - math.atan2(*(ankle0 - heel)[::-1])
+        e_x, e_y = to_x / dist, to_y / dist
+        land_x, land_y = heel_x + along * e_x + across * e_y, along * e_y - across * e_x
+        sole_up = math.atan2(land_y, land_x - heel_x) - math.atan2(ankle0_y, ankle0_x - heel_x)
         t_flat = attrs.foot_flat_fraction * 2 * t_step
         # d|hip - ankle|/dt = e.(v_hip - dA/dp p') = 0, the ankle A turning clockwise about the heel
         # as the pitch p rises: dA/dp = ((A - heel)_y, -(A - heel)_x)
-        e = (np.asarray(hip, float) - ankle) / body.l1
-        along = float(e @ np.array([ankle[1] - heel[1], heel[0] - ankle[0]]))
-        rate = float(e @ np.asarray(hip_velocity, float)) / along if abs(along) > 1e-12 else 0.0
-        return cls(foot, -sole_up, math.radians(attrs.theta6_impact), t_flat,
+        e_x, e_y = (hip_x - land_x) / body.l1, (hip_y - land_y) / body.l1
+        along = e_x * land_y + e_y * (heel_x - land_x)
+        v_x, v_y = (float(v) for v in hip_velocity)
+        rate = (e_x * v_x + e_y * v_y) / along if abs(along) > 1e-12 else 0.0
+        return cls(FlatFoot(body, ankle_x), -sole_up, math.radians(attrs.theta6_impact), t_flat,
                    math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
                    rocker_rate=max(rate, 0.0))
 
@@ -137,61 +141,26 @@ class StanceFoot:
         """The least pitch >= 0 at which the leg reaches its ankle with the hip-ankle distance
         ``fraction`` of l1 (a scalar or one per sample). Single support lets the knee straighten
         (1); the double support bends it towards REACH_FRACTION by toe-off, where swing1 takes
-        over its rates. The heel-up ankle moves on a circle about the metatarsal head, then about
-        the toe tip, so each piece is a circle intersection, in closed form (the walk asks this at
-        every node of every step); the distance to the hip falls as the heel rises."""
+        over its rates. In closed form (:func:`.heel_up_roots.reach_pitch`): the distance to the
+        hip falls as the heel rises."""
         hips = np.asarray(hips, float)
-        radius = self.foot.body.l1 * np.broadcast_to(fraction, (len(hips),))
-        q = self.meta_off_theta6
-        ankle0, ankle_q = self._ankle(np.array([0.0, q]))
-        pieces = ((self.foot.metatarsal, ankle0, 0.0, q), (self.foot.toe, ankle_q, q, MAX_PITCH))
-        pitch = np.full(len(hips), MAX_PITCH)
-        found = np.zeros(len(hips), bool)
-        for pivot, start, p0, p1 in pieces:
-            r = float(np.hypot(*(start - pivot)))
-            phi0 = math.atan2(start[1] - pivot[1], start[0] - pivot[0])   # the ankle at pitch p0
-            d = pivot - hips
-            dist = np.hypot(d[:, 0], d[:, 1])
-            # |pivot + r e(phi0 - (p - p0)) - hip| = R  <=>  d . e(psi) = K
-            k = (radius ** 2 - dist ** 2 - r ** 2) / (2 * r)
-            ok = (dist > 0) & (np.abs(k) <= dist)
-            alpha = np.arctan2(d[:, 1], d[:, 0])
-            spread = np.arccos(np.clip(k / np.where(dist > 0, dist, 1.0), -1, 1))
-            for sign in (1.0, -1.0):
-                cand = p0 + np.mod(phi0 - (alpha + sign * spread) + math.pi, 2 * math.pi) - math.pi
-                hit = ok & ~found & (cand >= p0 - 1e-15) & (cand <= p1 + 1e-15)
-                better = hit & (cand < pitch)
-                pitch = np.where(better, np.maximum(cand, p0), pitch)
-            found |= pitch <= p1 + 1e-15
-        reaches_flat = np.hypot(*(np.tile(ankle0, (len(hips), 1)) - hips).T) <= radius
-        return np.where(reaches_flat, 0.0, pitch)
+        return heel_up_roots.reach_pitch(self.foot, self.meta_off_theta6, self.heel_off_theta5, hips,
+                                         self.foot.body.l1 * np.asarray(fraction, float))
 
-    def ankle_limit_pitch(self, hips: np.ndarray) -> np.ndarray:
+    def ankle_limit_pitch(self, hips: np.ndarray, flat_excess=None) -> np.ndarray:
         """The least pitch >= 0 that holds θ5 at ``heel_off_theta5`` (0 while the flat foot is
-        below it). θ5 need not fall monotonically as the heel rises, so the first crossing is
-        bracketed on a 3° scan (one vectorised evaluation of every sample at every scan pitch) and
-        then bisected: the least root, which moves continuously."""
+        below it; ``flat_excess``: the flat foot's θ5 less the limit, when the caller has it). θ5
+        need not fall monotonically as the heel rises; this is its first crossing, in closed form
+        (:func:`.heel_up_roots.ankle_limit_pitch`)."""
         hips = np.asarray(hips, float)
+        if flat_excess is None:
+            flat_excess = self._flat_triggers(hips)[0]
         pitch = np.zeros(len(hips))
-
-        def excess(p, h):
-            ankle = self._ankle(p)
-            th3, th4, _ = leg_ik(self.foot.body, h, ankle)
-            return ankle_angle(th3, th4, -p) - self.heel_off_theta5      # the sole turns by -p
-        need = np.flatnonzero(excess(np.zeros(len(hips)), hips) > 0)
-        if not need.size:
-            return pitch
-        h = hips[need]
-        scan = np.linspace(0.0, MAX_PITCH, 30)
-        values = excess(np.repeat(scan, len(h)), np.tile(h, (len(scan), 1))).reshape(len(scan), len(h))
-        below = values <= 0
-        first = np.where(below.any(axis=0), below.argmax(axis=0), len(scan) - 1)
-        lo, hi = scan[np.maximum(first - 1, 0)], scan[first]
-        for _ in range(24):   # 3° / 2^24: 3e-9 rad
-            mid = 0.5 * (lo + hi)
-            over = excess(mid, h) > 0
-            lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
-        pitch[need] = hi
+        need = flat_excess > 0
+        if need.any():
+            body = self.foot.body
+            pitch[need] = heel_up_roots.ankle_limit_pitch(self.foot, self.meta_off_theta6, self.heel_off_theta5,
+                                                          hips[need], body.l3, body.l1)
         return pitch
 
     def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
@@ -211,10 +180,10 @@ class StanceFoot:
     def _flat_triggers(self, hips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """With the foot flat: θ5 minus its limit (rad) and the hip-ankle distance minus the reach
         (m, against the straight leg); the heel comes off where the first of them reaches zero."""
-        body, ankle = self.foot.body, np.tile(self.foot.ankle, (len(hips), 1))
+        body, ankle = self.foot.body, self.foot.ankle
         th3, th4, _ = leg_ik(body, hips, ankle)
-        theta5 = ankle_angle(th3, th4, np.zeros(len(hips)))
-        return theta5 - self.heel_off_theta5, np.hypot(*(ankle - hips).T) - body.l1
+        theta5 = ankle_angle(th3, th4, 0.0)
+        return theta5 - self.heel_off_theta5, np.hypot(ankle[0] - hips[:, 0], ankle[1] - hips[:, 1]) - body.l1
 
     def find_heel_off(self, t: np.ndarray, hips: np.ndarray) -> "StanceFoot":
         """The heel-off time from the single-support samples ``t`` (the stance's nodes): the first
@@ -222,7 +191,8 @@ class StanceFoot:
         other leg's heel strike if the heel stays down that long."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
         first = self.t_step
-        for g in self._flat_triggers(hips):
+        triggers = self._flat_triggers(hips)
+        for g in triggers:
             up = np.flatnonzero((g > 0) & (t >= self.t_flat))
             if not up.size:
                 continue
@@ -235,7 +205,8 @@ class StanceFoot:
         after = t >= first
         rule = np.zeros(len(t))
         if after.any():     # the searches only where the heel is off
-            rule[after] = np.maximum(self.ankle_limit_pitch(hips[after]), self.reach_pitch(hips[after]))
+            rule[after] = np.maximum(self.ankle_limit_pitch(hips[after], triggers[0][after]),
+                                     self.reach_pitch(hips[after]))
         held = np.maximum.accumulate(rule)
         # the heel leaves the ground at ``first``: the held pitch rises from 0 there, not along the
         # line between the nodes around it (which would lift the heel by a jump)
@@ -255,8 +226,11 @@ class StanceFoot:
 
     def pitch_at_other_heel_strike(self, hip: np.ndarray) -> float:
         """Where single support leaves the foot's pitch when the other leg strikes (>= 0)."""
-        before = np.array([self.t_step - 1e-12])
-        return max(float(self.pitch(before, np.atleast_2d(hip))[0]), 0.0)
+        key = tuple(np.asarray(hip, float).ravel())
+        if key not in self._start_pitches:
+            before = np.array([self.t_step - 1e-12])
+            self._start_pitches[key] = max(float(self.pitch(before, np.atleast_2d(hip))[0]), 0.0)
+        return self._start_pitches[key]
 
     def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float) -> "StanceFoot":
         """The rules of the double support: the pitch starts where single support left it and runs
@@ -298,10 +272,13 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
     def at(name, rows):
         value = rules[name]
         return value[rows] if np.ndim(value) else value
+    # each rule only where it applies (the walk asks mostly for one of them at a time, and each
+    # numpy operation costs about as much on no samples as on a few)
     pitch = np.zeros(len(t))
     rocker = t < rules["t_flat"]
-    pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker), at("rocker_rate", rocker))
-    # each rule only where it applies: the reach searches are most of the leg's cost
+    if rocker.any():
+        pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
+                                      at("rocker_rate", rocker))
     single = ~rocker & (t >= rules["t_heel_off"]) & (t < rules["t_step"])
     if single.any():
         pitch[single] = reach(hips[single])
@@ -312,9 +289,9 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
     if push.any():
         t_step, ease = at("t_step", push), at("push_ease", push)
         through = np.clip((t[push] - t_step) / np.maximum(at("t_toe_off", push) - t_step, 1e-12), 0, 1)
-        # easing in: a cubic with zero start rate, joining the line with its slope
-        s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
-        through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
+        if np.any(ease > 0):    # easing in: a cubic with zero start rate, joining the line with its slope
+            s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
+            through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
         start, end = at("pitch_ds_start", push), at("pitch_toe_off", push)
         linear = start + (end - start) * through
         pitch[push] = np.maximum(linear, reach(hips[push], 1 - (1 - REACH_FRACTION) * through))
@@ -330,7 +307,7 @@ def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> V
     body = geometry.foot.body
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
-    period = np.where(pitch > q, META_OFF, np.where(pitch > 0, HEEL_OFF, NORMAL))
+    period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q)]
     return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
                             th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
                             np.maximum(reach - body.l1, 0.0))
