@@ -108,10 +108,17 @@ def test_bad_config_values_via_main(capsys, tmp_path):
 
 
 def test_argparse_errors_exit_2(capsys):
+    """argparse's errors are one line too, naming the flag and what it allows; no usage banner."""
     code, _, err = run_main(capsys, "plan", "--speed", "abc")
-    assert code == 2 and "invalid float value: 'abc'" in err
+    assert code == 2 and err == "klaw-ocp: error: --speed: got 'abc', allowed a number (walking speed v, km/h)\n"
     code, _, err = run_main(capsys)
-    assert code == 2 and "a COMMAND is required" in err
+    assert code == 2 and "a COMMAND is required" in err and len(err.splitlines()) == 1
+    code, _, err = run_main(capsys, "run", "x.yaml", "--method", "newton")
+    assert err == "klaw-ocp: error: --method: got 'newton', allowed one of multiple-shooting, plain-shooting\n"
+    code, _, err = run_main(capsys, "frobnicate")
+    assert code == 2 and err.startswith("klaw-ocp: error: COMMAND: got 'frobnicate', allowed one of plan, validate, run")
+    code, _, err = run_main(capsys, "plan", "--height", "0")    # the height, not the missing speed
+    assert code == 2 and err.startswith("klaw-ocp: error: body.height: got 0.0")
 
 
 #: Every subcommand the CLI documents (cli.py's docstring, README): none may go missing.

@@ -168,7 +168,7 @@ def test_yaml_syntax_error_names_the_file_and_line(tmp_path):
     f.write_text("name: x\nbody: {height: 1.8, mass: 80\nwalk: {}\n", encoding="utf-8")
     with pytest.raises(ConfigError) as err:
         load_config(f)
-    assert str(err.value).startswith(f"{f}: invalid YAML at line ")
+    assert str(err.value).startswith(f"{f}: got invalid YAML at line ")
     assert "\n" not in str(err.value)
 
 

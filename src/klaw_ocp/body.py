@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ConfigError, out_of_range
+from .errors import ConfigError, finite_real, out_of_range
 
 #: Gravitational acceleration, m/s^2 (the paper never states it; ERRATA "Conventions").
 G = 9.81
@@ -56,7 +56,7 @@ class Body:
     def __post_init__(self) -> None:
         for name, value, (lo, hi), unit in (("height", self.height, HEIGHT_RANGE_M, "m"),
                                             ("mass", self.mass, MASS_RANGE_KG, "kg")):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or finite_real(value) is None:
                 raise ConfigError(out_of_range(f"body.{name}", value, f"a finite number in {unit}"))
             if not lo <= value <= hi:
                 raise ConfigError(out_of_range(f"body.{name}", value, f"{lo} to {hi} {unit}"))

@@ -12,7 +12,10 @@ a handler ``(args) -> exit code``; adding one is one more dict entry.
 - ``reproduce``: the paper's figures 8 and 10 and its numbers, into results/paper/.
 
 Errors: every :class:`klaw_ocp.errors.KlawError` becomes one line on stderr,
-``klaw-ocp: error: <message>``, and exit code 2 (argparse's own usage errors also exit 2).
+``klaw-ocp: error: <message>``, and exit code 2. So does every command-line error argparse
+finds (an unknown option, a bad choice, a number that is not one, a missing CONFIG, an unknown
+command): one line ``klaw-ocp: error: <flag>: got <value>, allowed <...>``, no usage banner
+(:class:`KlawArgumentParser`; ``klaw-ocp COMMAND --help`` shows the usage).
 """
 from __future__ import annotations
 
@@ -25,7 +28,87 @@ from typing import Callable
 
 from .commands import EXIT_USAGE, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
-from .errors import KlawError
+from .errors import ConfigError, KlawError, short_repr
+
+
+class UsageError(ConfigError):
+    """A command line argparse refused (an unknown option, a bad choice or number, a missing argument)."""
+
+
+def _brief(text: str | None) -> str:
+    """The first clause of an argument's help: what the argument is."""
+    text = " ".join((text or "").split())
+    for stop in ("; ", " (default", ", repeat"):
+        text = text.split(stop)[0]
+    return text
+
+
+class KlawArgumentParser(argparse.ArgumentParser):
+    """argparse, with every error one line ``<flag>: got <value>, allowed <...>`` raised as a
+    :class:`UsageError` (printed by :func:`main` like any other bad input) instead of a usage
+    banner and ``sys.exit``."""
+
+    def _action_named(self, name: str):
+        for action in self._actions:
+            if name in action.option_strings or name in (action.metavar, action.dest):
+                return action
+        return None
+
+    @staticmethod
+    def _name(action) -> str:
+        if action is None:
+            return "argument"
+        if action.option_strings:
+            return "/".join(action.option_strings)
+        return action.metavar if isinstance(action.metavar, str) else action.dest
+
+    def _get_value(self, action, arg_string):
+        try:
+            return super()._get_value(action, arg_string)
+        except argparse.ArgumentError:
+            kind = {float: "a number", int: "an integer"}.get(action.type, "a valid value")
+            what = _brief(action.help)
+            raise UsageError(f"{self._name(action)}: got {short_repr(arg_string)}, allowed {kind}"
+                             + (f" ({what})" if what else "")) from None
+
+    def _check_value(self, action, value):
+        if action.choices is not None and value not in action.choices:
+            choices = ", ".join(map(str, action.choices))
+            raise UsageError(f"{self._name(action)}: got {short_repr(value)}, allowed one of {choices}")
+
+    def known_options(self) -> str:
+        return ", ".join(a.option_strings[-1] for a in self._actions if a.option_strings)
+
+    def error(self, message: str):
+        """argparse's remaining errors (missing arguments, an option without its value, an
+        ambiguous abbreviation), as one line. (Python 3.12+ raises some of them as an
+        ArgumentError without an argument; the message says which.)"""
+        message = " ".join(str(message).split())
+        required = "the following arguments are required: "
+        if required in message:
+            name = message.split(required, 1)[1].split(", ")[0]
+            action = self._action_named(name)
+            what = _brief(action.help) if action is not None else ""
+            raise UsageError(f"{name}: got nothing, allowed one argument" + (f": {what}" if what else "")
+                             + f" (`{self.prog} --help`)")
+        if "ambiguous option: " in message:
+            option = message.split("ambiguous option: ", 1)[1].split(" could match ")[0]
+            matches = message.split(" could match ", 1)[1] if " could match " in message else ""
+            raise UsageError(f"{option}: got an ambiguous abbreviation, allowed one of {matches}")
+        exc = sys.exc_info()[1]
+        if isinstance(exc, argparse.ArgumentError) and exc.argument_name:
+            action = self._action_named(exc.argument_name)
+            detail = " ".join(exc.message.split())
+            if detail.startswith("expected"):        # --speed with no value
+                what = _brief(action.help) if action is not None else ""
+                raise UsageError(f"{exc.argument_name}: got nothing, allowed {detail.replace('expected ', '')}"
+                                 + (f" ({what})" if what else ""))
+            if detail.startswith("ignored explicit argument "):   # --quiet=3
+                value = detail[len("ignored explicit argument "):]
+                raise UsageError(f"{exc.argument_name}: got the value {value}, allowed no value (a flag)")
+            raise UsageError(f"{exc.argument_name}: got {short_repr(detail)}, allowed "
+                             f"the forms `{self.prog} --help` shows")
+        raise UsageError(f"{self.prog}: got {short_repr(message)}, allowed the forms `{self.prog} --help` shows")
 
 
 @dataclass(frozen=True)
@@ -52,7 +135,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = KlawArgumentParser(
         prog=PROG, description="KLAW (Bruderlin & Calvert 1989): goal-directed dynamic walking.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, command in SUBCOMMANDS.items():
@@ -64,20 +147,34 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def parse(parser: KlawArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """The command line as a namespace, or a :class:`UsageError` naming the first thing wrong."""
+    args, extra = parser.parse_known_args(argv)
+    handler = getattr(args, "handler", None)
+    if handler is None:
+        raise UsageError(f"COMMAND: got nothing (a COMMAND is required), allowed one of {', '.join(SUBCOMMANDS)}")
+    if extra:
+        sub = parser._subparsers._group_actions[0].choices[args.command]   # noqa: SLF001
+        first = extra[0]
+        if first.startswith("-") and len(first) > 1:
+            option = first.split("=")[0]
+            option = option if len(option) <= 40 else option[:39] + "…"
+            raise UsageError(f"{option}: got an unknown option, allowed the options of "
+                             f"{PROG} {args.command}: {sub.known_options()}")
+        raise UsageError(f"{PROG} {args.command}: got the extra argument {short_repr(first, 60)}, allowed "
+                         f"the arguments `{PROG} {args.command} --help` shows")
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``klaw-ocp``; returns the exit code (0 ok, 1 a subphase did not converge, 2 bad input)."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse reports usage errors itself and exits 2 (--help: 0)
-        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
-    handler = getattr(args, "handler", None)
-    if handler is None:
-        parser.print_usage(sys.stderr)
-        print(f"{PROG}: error: a COMMAND is required, allowed: {', '.join(SUBCOMMANDS)}", file=sys.stderr)
-        return EXIT_USAGE
-    try:
-        return handler(args)
+        try:
+            args = parse(parser, argv)
+        except SystemExit as exc:  # --help and --version print and exit 0
+            return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+        return args.handler(args)
     except KlawError as exc:
         message = " ".join(str(exc).split("\n"))
         print(f"{PROG}: error: {message}", file=sys.stderr)

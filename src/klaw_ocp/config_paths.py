@@ -12,9 +12,7 @@ from __future__ import annotations
 import math
 import re
 
-import yaml
-
-from .errors import ConfigError, out_of_range
+from .errors import ConfigError, out_of_range, short_repr
 
 #: The largest sweep accepted (walks, counting each method separately).
 MAX_WALKS = 10_000
@@ -23,18 +21,30 @@ RANGE_REL_TOL = 1e-9
 #: Range values are rounded to this many significant digits (0.1:0.3:0.1 gives 0.3, not 0.30000000000000004).
 RANGE_DIGITS = 12
 _PATH = re.compile(r"^[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*$")
+#: The longest PATH (characters) and the most keys in it: the schema's deepest field is three deep.
+MAX_PATH_CHARS = 200
+MAX_PATH_KEYS = 8
+#: The longest VALUE or VALUES (characters).
+MAX_VALUE_CHARS = 10_000
 _SET_ALLOWED = ("PATH=VALUE with PATH a dotted config path (walk.speed, attributes.toe_clearance, "
                 "body.height) and VALUE one YAML scalar (4, 0.03, true, plain-shooting)")
 _VARY_ALLOWED = ("PATH=VALUES with PATH a dotted config path (walk.speed) and VALUES a comma list of "
                  "YAML scalars (1,3,5 or true,false) or ranges start:stop:step with step > 0 (0.5:8:0.5)")
 
 
+def _good_path(path: str) -> bool:
+    return (len(path) <= MAX_PATH_CHARS and bool(_PATH.match(path))
+            and path.count(".") < MAX_PATH_KEYS)
+
+
 def parse_vary(text: str) -> tuple[str, list]:
     """``"walk.speed=1,3,5"`` -> ``("walk.speed", [1, 3, 5])``; one-line ConfigError otherwise."""
     path, sep, values = str(text).partition("=")
     path = path.strip()
-    if not sep or not _PATH.match(path):
+    if not sep or not _good_path(path):
         raise ConfigError(out_of_range("--vary", text, _VARY_ALLOWED))
+    if len(values) > MAX_VALUE_CHARS:
+        raise ConfigError(f"--vary {path}: got {len(values)} characters of values, allowed at most {MAX_VALUE_CHARS}")
     return path, parse_values(values, path)
 
 
@@ -43,8 +53,10 @@ def parse_set(text: str) -> tuple[str, object]:
     each of its values; one-line ConfigError otherwise."""
     path, sep, value = str(text).partition("=")
     path = path.strip()
-    if not sep or not _PATH.match(path) or not value.strip():
+    if not sep or not _good_path(path) or not value.strip():
         raise ConfigError(out_of_range("--set", text, _SET_ALLOWED))
+    if len(value) > MAX_VALUE_CHARS:
+        raise ConfigError(f"--set {path}: got a value of {len(value)} characters, allowed at most {MAX_VALUE_CHARS}")
     return path, _parse_scalar(value.strip(), path, flag="--set", allowed=_SET_ALLOWED)
 
 
@@ -58,7 +70,7 @@ def set_path(mapping: dict, path: str, value, flag: str = "--vary") -> None:
         node = node[key]
         if not isinstance(node, dict):
             where = ".".join(keys[: depth + 1])
-            raise ConfigError(f"{flag} {path}: got {where} = {node!r} in the config, allowed a path "
+            raise ConfigError(f"{flag} {path}: got {where} = {short_repr(node, 60)} in the config, allowed a path "
                               f"through mappings only")
     node[keys[-1]] = value
 
@@ -75,7 +87,7 @@ def parse_values(text: str, path: str = "PATH") -> list:
     """A comma list whose items are YAML scalars or inclusive ranges ``start:stop:step``."""
     items = [item.strip() for item in str(text).split(",")]
     if not all(items):
-        raise ConfigError(f"--vary {path}: got {text!r} (an empty value), allowed {_VARY_ALLOWED}")
+        raise ConfigError(f"--vary {path}: got {short_repr(text)} (an empty value), allowed {_VARY_ALLOWED}")
     values: list = []
     for item in items:
         values += _parse_range(item, path) if ":" in item else [_parse_scalar(item, path)]
@@ -85,17 +97,18 @@ def parse_values(text: str, path: str = "PATH") -> list:
 
 
 def _parse_scalar(item: str, path: str, flag: str = "--vary", allowed: str = _VARY_ALLOWED):
+    from .config import parse_yaml   # the bounded safe loader of config files
     try:
-        value = yaml.safe_load(item)
-    except yaml.YAMLError:
-        raise ConfigError(f"{flag} {path}: got {item!r}, allowed {allowed}") from None
+        value = parse_yaml(item, f"{flag} {path}")
+    except ConfigError:
+        raise ConfigError(f"{flag} {path}: got {short_repr(item)}, allowed {allowed}") from None
     if isinstance(value, str):  # YAML 1.1 reads 1e-3 as a string; a number is meant
         try:
             return float(value)
         except ValueError:
             return value
-    if isinstance(value, (list, dict)):
-        raise ConfigError(f"{flag} {path}: got {item!r}, allowed {allowed}")
+    if not isinstance(value, (bool, int, float, str, type(None))):   # a list, a mapping, a date
+        raise ConfigError(f"{flag} {path}: got {short_repr(item)}, allowed {allowed}")
     return value
 
 
@@ -107,17 +120,21 @@ def _parse_range(item: str, path: str) -> list:
             raise ValueError
         start, stop, step = (int(p) if re.fullmatch(r"\s*[-+]?\d+\s*", p) else float(p) for p in parts)
     except ValueError:
-        raise ConfigError(f"--vary {path}: got {item!r}, allowed a range start:stop:step of numbers "
+        raise ConfigError(f"--vary {path}: got {short_repr(item)}, allowed a range start:stop:step of numbers "
                           f"(0.5:8:0.5)") from None
-    if not all(math.isfinite(x) for x in (start, stop, step)) or step <= 0:
-        raise ConfigError(f"--vary {path}: got range {item!r}, allowed finite numbers with step > 0")
-    span = (stop - start) / step
-    whole = round(span)
+    try:
+        finite = all(math.isfinite(x) for x in (start, stop, step))   # an int beyond float: OverflowError
+        span = (stop - start) / step if finite and step > 0 else None
+        whole = round(span) if span is not None else None
+    except OverflowError:
+        finite = False
+    if not finite or step <= 0:
+        raise ConfigError(f"--vary {path}: got range {short_repr(item)}, allowed finite numbers with step > 0")
     count = (whole if abs(span - whole) <= RANGE_REL_TOL * max(1.0, abs(span)) else math.floor(span)) + 1
     if count < 1:
-        raise ConfigError(f"--vary {path}: got range {item!r}, which yields no value, allowed start <= stop")
+        raise ConfigError(f"--vary {path}: got range {short_repr(item)}, which yields no value, allowed start <= stop")
     if count > MAX_WALKS:
-        raise ConfigError(f"--vary {path}: got range {item!r} with {count} values, allowed at most {MAX_WALKS} walks")
+        raise ConfigError(f"--vary {path}: got range {short_repr(item)} with {count if count < 10**9 else f'{float(count):.3g}'} values, allowed at most {MAX_WALKS} walks")
     if all(isinstance(x, int) for x in (start, stop, step)):
         return [start + i * step for i in range(count)]
     # RANGE_DIGITS significant digits of the range's scale: 0.30000000000000004 -> 0.3, 5.6e-17 -> 0

@@ -30,8 +30,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .errors import ConfigError, ConvergenceError, KlawError, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
@@ -47,21 +45,14 @@ STATUSES = ("ok", "failed", "error")
 # ---------------------------------------------------------------------------- grid, validation
 
 def read_mapping(config) -> dict:
-    """The experiment as a plain mapping: a dict (copied) or a YAML file (not validated here)."""
+    """The experiment as a plain mapping: a dict (copied) or a YAML file (read by the bounded
+    loader of config files, :func:`klaw_ocp.config.read_yaml_file`; not validated here)."""
     if isinstance(config, dict):
         return copy.deepcopy(config)
-    path = Path(config)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(out_of_range("config", str(path), "an existing YAML file (not found)")) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(out_of_range("config", str(path), f"a readable UTF-8 YAML file ({type(exc).__name__})")) from None
-    except yaml.YAMLError as exc:
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"{path}: invalid YAML: {problem}") from None
+    from .config import read_yaml_file
+    data = read_yaml_file(config)
     if not isinstance(data, dict):
-        raise ConfigError(out_of_range("config", str(path), "a mapping with name, body, walk"))
+        raise ConfigError(out_of_range("config", str(config), "a mapping with name, body, walk"))
     return data
 
 

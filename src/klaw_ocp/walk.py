@@ -126,16 +126,11 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     overrides the configured solver. On a subphase that does not converge, raise
     :class:`ConvergenceError` (naming step, subphase, residual) whose ``partial`` is the
     :class:`Walk` of the steps completed before it; with ``raise_on_failure=False`` return that
-    walk with ``status == "failed"`` instead."""
-    if not isinstance(spec, WalkSpec):
-        from .config import ExperimentConfig, load_config
-        config = spec if isinstance(spec, ExperimentConfig) else (
-            ExperimentConfig.from_mapping(spec) if isinstance(spec, dict) else load_config(spec))
-        spec = walk_spec(config, method)
-    elif method is not None:
-        spec = replace(spec, method=method)
-    from .config import check_stance_method
-    check_stance_method(spec.stance, spec.method)
+    walk with ``status == "failed"`` instead. Every argument is checked before anything is built
+    or solved: a bad one raises :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what
+    is allowed; :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk
+    outside the supported envelope)."""
+    spec = _checked_spec(spec, method, progress, raise_on_failure)
     wall0 = time.perf_counter()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)
@@ -171,6 +166,79 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
         return walk
     walk.wall_s = time.perf_counter() - wall0
     return walk
+
+
+_SPEC_ALLOWED = ("a WalkSpec, an ExperimentConfig, a mapping in the config's shape (name, body, walk, ...) "
+                 "or the path of a YAML config file (a str or os.PathLike)")
+
+
+def _checked_spec(spec, method, progress, raise_on_failure) -> WalkSpec:
+    """:func:`simulate_walk`'s arguments checked before anything is built or solved: the walk as
+    a :class:`WalkSpec` within the config's bounds, or one ConfigError line naming the argument."""
+    import os
+
+    from .config import (INTERVALS_RANGE, ITERATIONS_RANGE, LOCK_RULES, NLP_CHOICES, SOLVER_METHODS,
+                         STANCES, TOLERANCE_RANGE, ExperimentConfig, check_stance_method,
+                         check_walk_size, load_config)
+    from .errors import ConfigError, out_of_range
+    from .gait import LocomotionAttributes, StepPlan
+    from .gait.plan import MAX_STEPS
+
+    if method is not None and (not isinstance(method, str) or method not in SOLVER_METHODS):
+        raise ConfigError(out_of_range("method", method, f"None or one of {', '.join(SOLVER_METHODS)}"))
+    for name, value in (("progress", progress), ("raise_on_failure", raise_on_failure)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ConfigError(out_of_range(name, value, "True or False"))
+    if isinstance(spec, WalkSpec):
+        spec = spec if method is None else replace(spec, method=method)
+    elif isinstance(spec, ExperimentConfig):
+        spec = walk_spec(spec, method)
+    elif isinstance(spec, dict):
+        spec = walk_spec(ExperimentConfig.from_mapping(spec), method)
+    elif isinstance(spec, (str, os.PathLike)):
+        spec = walk_spec(load_config(spec), method)
+    else:
+        raise ConfigError(out_of_range("spec", spec, _SPEC_ALLOWED))
+
+    def need(field: str, ok: bool, value, allowed: str) -> None:
+        if not ok:
+            raise ConfigError(out_of_range(f"spec.{field}", value, allowed))
+
+    def integer(value) -> bool:
+        return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+    def number(value) -> bool:
+        return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+    need("name", isinstance(spec.name, str), spec.name, "a str")
+    need("body", isinstance(spec.body, Body), spec.body, "a klaw_ocp.Body")
+    need("attributes", isinstance(spec.attributes, LocomotionAttributes), spec.attributes,
+         "a klaw_ocp.gait.LocomotionAttributes")
+    need("plans", isinstance(spec.plans, (list, tuple)) and 1 <= len(spec.plans) <= MAX_STEPS
+         and all(isinstance(p, StepPlan) for p in spec.plans), spec.plans,
+         f"a list of 1 to {MAX_STEPS} klaw_ocp.gait.StepPlan (klaw_ocp.gait.plan_steps)")
+    def choice(field: str, choices: tuple) -> None:
+        value = getattr(spec, field)
+        need(field, isinstance(value, str) and value in choices, value, f"one of {', '.join(choices)}")
+
+    choice("method", SOLVER_METHODS)
+    lo, hi = INTERVALS_RANGE
+    need("intervals", integer(spec.intervals) and lo <= spec.intervals <= hi, spec.intervals,
+         f"an integer from {lo} to {hi}")
+    lo, hi = TOLERANCE_RANGE
+    need("tolerance", number(spec.tolerance) and lo <= spec.tolerance <= hi, spec.tolerance,
+         f"a number from {lo:g} to {hi:g}")
+    lo, hi = ITERATIONS_RANGE
+    need("max_iterations", integer(spec.max_iterations) and lo <= spec.max_iterations <= hi,
+         spec.max_iterations, f"an integer from {lo} to {hi}")
+    choice("nlp", NLP_CHOICES)
+    choice("stance", STANCES)
+    choice("lock_rule", LOCK_RULES)
+    for flag in ("start_from_rest", "end_at_rest"):
+        need(flag, isinstance(getattr(spec, flag), (bool, np.bool_)), getattr(spec, flag), "True or False")
+    check_walk_size(len(spec.plans), int(spec.intervals))
+    check_stance_method(spec.stance, spec.method)
+    return spec
 
 
 def closing_plan(spec: WalkSpec):

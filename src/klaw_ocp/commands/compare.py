@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..errors import ConfigError, out_of_range
 from . import EXIT_NOT_CONVERGED, EXIT_OK, PROG
-from ._common import add_set_option, load, resolved_header
+from ._common import add_set_option, check_output_dir, load, resolved_header
 
 HELP = "compare runs: solver modes, stance formulations, configs or finished results folders"
 METHODS = ("multiple-shooting", "plain-shooting")
@@ -99,7 +99,8 @@ def handle(args: argparse.Namespace) -> int:
     planned = plan_runs(args)           # every input checked before the first walk
     first = planned[0]
     name = first["config"].name if "config" in first else RunData.from_folder(first["folder"], "INPUT").name
-    out = Path(args.out) if args.out else Path("results") / f"{name}-compare"
+    out = check_output_dir(args.out if args.out is not None else Path("results") / f"{name}-compare",
+                           "--out")
     runs, failed = [], []
     for item in planned:
         if "folder" in item:

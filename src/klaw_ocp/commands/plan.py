@@ -44,11 +44,12 @@ def handle(args: argparse.Namespace) -> int:
         body, attrs, plans = cfg.body_model(), cfg.attributes_model(), cfg.plan()
         header = {"name": cfg.name}
     else:
+        # the flags in the order they are listed: a bad --height is named even without a speed
+        body = Body(height=DEFAULT_HEIGHT_M if args.height is None else args.height,
+                    mass=DEFAULT_MASS_KG if args.mass is None else args.mass)
         if args.speed is None and args.step_length is None and args.step_frequency is None:
             raise ConfigError("plan: got no locomotion parameter, allowed a CONFIG file or at least "
                               "one of --speed, --step-length, --step-frequency")
-        body = Body(height=DEFAULT_HEIGHT_M if args.height is None else args.height,
-                    mass=DEFAULT_MASS_KG if args.mass is None else args.mass)
         attrs = LocomotionAttributes.defaults()
         request = {"speed": args.speed, "step_length": args.step_length,
                    "step_frequency": args.step_frequency}

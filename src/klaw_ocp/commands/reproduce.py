@@ -25,6 +25,8 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     from ..reproduce import reproduce
+    from ._common import check_output_dir
+    check_output_dir(args.out, "--out")
     t0 = time.perf_counter()
     written = reproduce(args.configs, args.out, progress=not args.quiet)
     print(f"reproduced the paper in {time.perf_counter() - t0:.1f} s: wrote {len(written)} files to {args.out}/ "

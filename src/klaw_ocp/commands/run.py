@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from . import EXIT_NOT_CONVERGED, EXIT_OK, PROG
-from ._common import add_set_option, load, resolved_header
+from ._common import add_set_option, check_output_dir, check_plots, load, resolved_header
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
 VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
@@ -54,11 +54,12 @@ def configure_run(p: argparse.ArgumentParser) -> None:
 
 
 def handle_run(args: argparse.Namespace) -> int:
-    from ..errors import ConvergenceError
-    from ..walk import simulate_walk, walk_spec
-
     config = load(args.config, args.sets, args.method, args.stance, args.fps)
-    out = Path(args.out) if args.out else config.output_dir()
+    out = check_output_dir(args.out if args.out is not None else config.output_dir(),
+                           "--out" if args.out is not None else "output.dir")
+    check_plots(config, config.output.plots and not args.no_plots)
+    from ..errors import ConvergenceError
+    from ..walk import simulate_walk, walk_spec     # the solvers: only for a valid run
     failure = None
     try:
         walk = simulate_walk(walk_spec(config), progress=not args.quiet)
@@ -132,6 +133,8 @@ def configure_validate(p: argparse.ArgumentParser) -> None:
 def handle_validate(args: argparse.Namespace) -> int:
     from .plan import format_table
     config = load(args.config, args.sets)
+    check_output_dir(config.output_dir(), "output.dir")
+    check_plots(config, config.output.plots, flag="klaw-ocp run --no-plots")
     plans = config.full_plan()
     print(format_table(config.body_model(), plans, config.name))
     s, w = config.solver, config.walk
@@ -161,8 +164,8 @@ def configure_plot(p: argparse.ArgumentParser) -> None:
 def handle_plot(args: argparse.Namespace) -> int:
     from ..io import RunData, write_rendered
     run = RunData.from_folder(args.dir, what="DIR")     # refused before matplotlib is even loaded
+    out = check_output_dir(args.out if args.out is not None else Path(args.dir) / PLOTS_DIR, "--out")
     from ..io.plots import render_plots
-    out = Path(args.out) if args.out else Path(args.dir) / PLOTS_DIR
     paths = write_rendered(render_plots(run), out)
     print(f"{run.name}: wrote {len(paths)} plots to {out}/ ({', '.join(p.name for p in paths.values())})")
     if args.animation:

@@ -45,9 +45,12 @@ def handle(args: argparse.Namespace) -> int:
         if path in vary:
             raise ConfigError(f"--vary {path}: got the path twice, allowed each path once")
         vary[path] = values
+    from ._common import check_output_dir
+    check_output_dir(args.out if args.out is not None else default_out_dir(args.config),
+                     "--out")
     rows = run_sweep(args.config, vary, methods=args.method, workers=args.workers,
                      scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty())
-    out = args.out or default_out_dir(args.config)
+    out = args.out if args.out is not None else default_out_dir(args.config)
     paths = write_sweep(rows, list(vary), out, title=f"{PROG} sweep {os.path.basename(args.config)}")
     print(summary_line(rows, paths))
     n = counts(rows)

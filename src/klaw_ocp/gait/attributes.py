@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from ..errors import ConfigError, out_of_range
+from ..errors import ConfigError, finite_real, out_of_range
 
 _OURS = "not in the paper; our choice, see docs/paper-map.md"
 
@@ -48,10 +48,11 @@ class AttributeSpec:
         field = f"attributes.{self.name}"
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ConfigError(out_of_range(field, value, f"a number in {self.unit}"))
-        value = float(value)
-        if not math.isfinite(value) or not self.low <= value <= self.high:
-            raise ConfigError(out_of_range(field, value, f"{self.low:g} to {self.high:g} {self.unit}"))
-        return value
+        number = finite_real(value)
+        if number is None or not self.low <= number <= self.high:
+            raise ConfigError(out_of_range(field, value if number is None else number,
+                                           f"{self.low:g} to {self.high:g} {self.unit}"))
+        return number
 
 
 def _spec(group, name, unit, default, low, high, paper):

@@ -18,7 +18,7 @@ import numbers
 from dataclasses import dataclass
 
 from ..body import Body
-from ..errors import ConfigError, GaitLimitError, out_of_range
+from ..errors import ConfigError, GaitLimitError, finite_real, out_of_range
 from .attributes import LocomotionAttributes, resolve
 
 #: The constant of eq. 1: sl / (sf · H) with sl and H in m and sf in steps/min (unit min/step).
@@ -63,10 +63,10 @@ def _positive(field: str, value, unit: str) -> float | None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ConfigError(out_of_range(field, value, f"a finite number > 0 in {unit}"))
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise ConfigError(out_of_range(field, value, f"a finite number > 0 in {unit}"))
-    return value
+    number = finite_real(value)
+    if number is None or number <= 0.0:
+        raise ConfigError(out_of_range(field, value if number is None else number, f"a finite number > 0 in {unit}"))
+    return number
 
 
 def natural_step_length(height_m: float, speed_m_per_min: float) -> float:
@@ -118,6 +118,12 @@ def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequ
                 f"{100 * mismatch:.3g} % off), allowed a mismatch of at most {100 * tol:g} % "
                 f"(attributes.parameter_consistency_tolerance)")
         v = sl * sf
+    # the values typed, as typed, first: then the completion below stays within floats
+    # (5e-324 km/h would give sl = 0 and 1e308 km/h an infinite v)
+    typed = {f_v: v_kmh, f_sl: sl, f_sf: sf}
+    _check_limits(body, None, attrs, given, (f_v, f_sl, f_sf), typed)
+    if v is not None and sl is not None and sf is not None:
+        pass                            # all three: v = sl·sf above
     elif v is not None and sl is not None:
         sf = v / sl
     elif v is not None and sf is not None:
@@ -140,20 +146,28 @@ def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequ
     return params
 
 
-def _check_limits(body: Body, p: LocomotionParameters, attrs: LocomotionAttributes,
-                  given: dict[str, bool], fields: tuple[str, str, str]) -> None:
-    """Raise GaitLimitError for the first value outside its limits, user-given values first."""
+def _check_limits(body: Body, p: LocomotionParameters | None, attrs: LocomotionAttributes,
+                  given: dict[str, bool], fields: tuple[str, str, str], typed: dict | None = None) -> None:
+    """Raise GaitLimitError for the first value outside its limits, user-given values first,
+    checked as typed (1e308 km/h is reported as such, not as the infinity its m/min overflows
+    to). With ``p`` None only the typed values are checked."""
     f_v, f_sl, f_sf = fields
     l1 = body.l1
+    values = ({f_v: None, f_sl: None, f_sf: None} if p is None else
+              {f_v: p.speed_kmh, f_sl: p.step_length_m, f_sf: p.step_frequency_spm})
     checks = [
-        (f_v, p.speed_kmh, attrs.speed_min, attrs.speed_max, "km/h", "speed_min/speed_max"),
-        (f_sl, p.step_length_m, attrs.step_length_min_rel * l1, attrs.step_length_max_rel * l1, "m",
+        (f_v, values[f_v], attrs.speed_min, attrs.speed_max, "km/h", "speed_min/speed_max"),
+        (f_sl, values[f_sl], attrs.step_length_min_rel * l1, attrs.step_length_max_rel * l1, "m",
          f"step_length_min_rel/step_length_max_rel × leg length l1 = {l1:.4g} m"),
-        (f_sf, p.step_frequency_spm, attrs.sf_min, attrs.sf_max, "steps/min", "sf_min/sf_max"),
+        (f_sf, values[f_sf], attrs.sf_min, attrs.sf_max, "steps/min", "sf_min/sf_max"),
     ]
     # A value the user typed is the likelier culprit, so report it before derived ones.
     checks.sort(key=lambda c: not given[c[0]])
     for field, value, lo, hi, unit, source in checks:
+        if given[field] and typed and typed.get(field) is not None:
+            value = typed[field]
+        if value is None:
+            continue
         if not lo <= value <= hi:
             origin = "" if given[field] else " (completed by eq. 1)"
             raise GaitLimitError(f"{field}: got {value:.6g} {unit}{origin}, allowed {lo:.4g} to "

@@ -12,22 +12,23 @@ Schedule semantics (our reading of section 5; see docs/paper-map.md):
 * Between two entries k_a < k_b, speed and step length are interpolated linearly per step and
   ``sf = v/sl``, so a walk speeds up or slows down smoothly. sf is then a ratio of two linear
   functions, monotone between the entries, so it never leaves the range the two entries span.
+* Entries are listed in increasing step order (an entry out of order is refused, not sorted).
 * Before the first entry the base walk parameters hold; after the last entry its values hold.
 * Steps are numbered from 0. Step i starts where step i-1 ended: its stance origin is the
   previous step's ``next_ankle_x`` (the first starts at x = 0) and its start time is the sum of the
   previous steps' t_step.
 * A duration becomes a number of steps by adding steps until their summed t_step reaches it
   (at least one step).
+* A walk is at most :data:`MAX_STEPS` steps and :data:`MAX_WALK_S` seconds long.
 """
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from ..body import Body
-from ..errors import ConfigError, out_of_range
+from ..errors import ConfigError, finite_real, out_of_range
 from .attributes import LocomotionAttributes, resolve
 from .envelope import check_body, check_step_changes, check_step_length
 from .parameters import KMH_TO_M_PER_MIN, LocomotionParameters, complete_parameters, natural_step_length
@@ -36,8 +37,13 @@ from .timings import StateTimings, state_phase_timings
 
 #: Keys of a request or schedule entry that carry locomotion parameters.
 PARAMETER_KEYS = ("speed", "step_length", "step_frequency")
-#: A guard against a duration so long that planning would never end.
-MAX_STEPS = 100_000
+#: The longest walk accepted: at most this many steps ...
+MAX_STEPS = 1000
+#: ... and at most this many seconds of walking (the closing step of a walk that ends at rest
+#: comes on top). Measured (docs/limits.md): the slowest walks to solve (fast cadence, short
+#: steps) take about 0.15 s of CPU a step, so the longest walk is solved in a few minutes; its
+#: memory and result files stay within a few hundred MB.
+MAX_WALK_S = 600.0
 
 
 @dataclass(frozen=True)
@@ -88,12 +94,16 @@ def _complete(body, values: dict, attrs, prefix: str) -> LocomotionParameters:
 
 
 def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionParameters]], dict]:
-    """Completed entries sorted by step, and each step's position in the user's list."""
+    """Completed entries in step order, and each step's position in the user's list; entries
+    must come in increasing step order."""
     if schedule is None:
         return [], {}
     if isinstance(schedule, (str, bytes, Mapping)) or not isinstance(schedule, Sequence):
         raise ConfigError(out_of_range("walk.schedule", schedule, "a list of {step, speed?, "
                                        "step_length?, step_frequency?} entries"))
+    if len(schedule) > MAX_STEPS:
+        raise ConfigError(f"walk.schedule: got {len(schedule)} entries, allowed at most {MAX_STEPS} "
+                          f"(one per step)")
     entries: dict[int, LocomotionParameters] = {}
     positions: dict[int, int] = {}
     for j, entry in enumerate(schedule):
@@ -111,6 +121,10 @@ def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionPa
         k = int(k)
         if k in entries:
             raise ConfigError(out_of_range(f"{field}.step", k, "a step not already in the schedule"))
+        if entries and k < max(entries):
+            last = max(entries)
+            raise ConfigError(out_of_range(f"{field}.step", k, f"a step after {last} (walk.schedule"
+                                           f"[{positions[last]}].step): entries in increasing step order"))
         values = _request_values(entry, field)
         if all(values[key] is None for key in PARAMETER_KEYS):
             raise ConfigError(out_of_range(field, dict(entry), "at least one of speed, step_length, "
@@ -187,8 +201,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
                                 or not 1 <= n_steps <= MAX_STEPS):
         raise ConfigError(out_of_range("walk.steps", n_steps, f"an integer from 1 to {MAX_STEPS}"))
     if duration is not None and (isinstance(duration, bool) or not isinstance(duration, numbers.Real)
-                                 or not math.isfinite(duration) or duration <= 0):
-        raise ConfigError(out_of_range("walk.duration", duration, "a finite number > 0 in s"))
+                                 or finite_real(duration) is None or not 0 < duration <= MAX_WALK_S):
+        raise ConfigError(out_of_range("walk.duration", duration, f"a number > 0 and <= {MAX_WALK_S:g} s"))
 
     base_values = _request_values(base_request, "walk")
     check_body(body)
@@ -210,8 +224,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         if duration is not None and i >= 1 and t >= duration - 1e-9:
             break  # the tolerance keeps an exact multiple of t_step from adding a step
         if i >= MAX_STEPS:
-            raise ConfigError(out_of_range("walk.duration", duration,
-                                           f"a duration of at most {MAX_STEPS} steps"))
+            raise ConfigError(f"walk.duration: got {duration:g} s, which takes more than {MAX_STEPS} "
+                              f"steps, allowed at most {MAX_STEPS} steps (docs/limits.md)")
         p = _parameters_at(i, base, entries, body, attrs)
         if start_from_rest:
             p = _start_ramp(i, p, body, attrs)
@@ -221,6 +235,10 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))
         t += timings.t_step
         x = constraints.next_ankle_x
+        if n_steps is not None and t > MAX_WALK_S + 1e-9:
+            raise ConfigError(f"walk.steps: got {n_steps} steps, which last more than {MAX_WALK_S:g} s "
+                              f"({i + 1} steps take {t:.4g} s), allowed at most {MAX_WALK_S:g} s of "
+                              f"walking (docs/limits.md)")
 
     # An entry the walk never reaches would be silently ignored; say so instead.
     last_step = entries[-1][0] if entries else -1

@@ -32,11 +32,10 @@ length apart.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import asdict, dataclass
 
 from ..body import Body
-from ..errors import ConfigError, GaitLimitError, out_of_range
+from ..errors import ConfigError, GaitLimitError, finite_real, out_of_range
 from .attributes import LocomotionAttributes, resolve
 
 
@@ -79,10 +78,10 @@ class StepConstraints:
 
 
 def _finite(field: str, value, allowed: str, positive: bool) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
-            or (positive and value <= 0):
+    number = finite_real(value)
+    if number is None or (positive and number <= 0):
         raise ConfigError(out_of_range(field, value, allowed))
-    return float(value)
+    return number
 
 
 def step_constraints(body: Body, step_length, attributes: LocomotionAttributes | None = None,

@@ -15,11 +15,9 @@ fractions are locomotion attributes.
 """
 from __future__ import annotations
 
-import math
-import numbers
 from dataclasses import asdict, dataclass
 
-from ..errors import ConfigError, GaitLimitError, out_of_range
+from ..errors import ConfigError, GaitLimitError, finite_real, out_of_range
 from .attributes import LocomotionAttributes, resolve
 
 #: Coefficients of the double-support law t_ds/t_cycle [%] = DS_SLOPE·sf + DS_OFFSET (section 3).
@@ -60,7 +58,7 @@ def state_phase_timings(step_frequency_spm, attributes: LocomotionAttributes | N
         GaitLimitError: sf ≥ 181.75 steps/min, where the double support t_ds is no longer > 0.
     """
     sf = step_frequency_spm
-    if isinstance(sf, bool) or not isinstance(sf, numbers.Real) or not math.isfinite(sf) or sf <= 0:
+    if finite_real(sf) is None or sf <= 0:
         raise ConfigError(out_of_range(field, sf, "a finite number > 0 in steps/min"))
     sf = float(sf)
     attrs = resolve(attributes)
