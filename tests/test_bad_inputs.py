@@ -257,8 +257,9 @@ def outcomes(request, tmp_path_factory):
     """Every selected case run once, on every core at a time (each in a working directory of its
     own): case id -> (folder, its listing before, the finished process)."""
     from concurrent.futures import ThreadPoolExecutor
+    # this module's selected cases only (other modules have parameters named "case" too)
     wanted = {item.callspec.params["case"].id for item in request.session.items
-              if getattr(item, "callspec", None) and "case" in item.callspec.params}
+              if getattr(item, "callspec", None) and isinstance(item.callspec.params.get("case"), Case)}
     cases = [c for c in CASES if c.id in wanted]
     folders = {c.id: tmp_path_factory.mktemp("bad") for c in cases}
     before = {c.id: _prepare(c, folders[c.id]) for c in cases}
