@@ -16,7 +16,8 @@ shooting with the tracking stance) it runs the walk once to build or load the so
 It times the five plots of a run (``klaw_ocp.io.plots.render_plots`` of the multiple-shooting
 walk) on their own line: the first rendering in the process (it imports matplotlib) and the median
 of the others; and, apart from the walk, its ``walk.gif`` (``klaw_ocp.io.animation``, docs/gif.md:
-rendered and written once, after the plots). Then it runs ``klaw-ocp run CONFIG --no-plots
+rendered and written once, after the plots); and the step-by-step writing of ``klaw-ocp run``
+(``klaw_ocp.io.run_writer``: ms a step, and its cost beyond a one-shot write). Then it runs ``klaw-ocp run CONFIG --no-plots
 --no-animation`` twice as whole processes with an empty kernel cache (the first compiles the
 kernels, the second loads them) and ``klaw-ocp run CONFIG --no-animation`` with its plots once
 more, and reports their wall time and peak RSS.
@@ -80,6 +81,32 @@ def _mode(config, method: str, stance: str, repeats: int) -> dict:
             "realtime_factor": walk.duration / pipe, "subphases": per_subphase}
 
 
+def _step_writing(config, repeats: int) -> dict:
+    """``klaw-ocp run``'s writing as the walk goes (klaw_ocp.io.run_writer, multiple shooting):
+    the medians of the per-step writing (ms a step), of the rest written at the end (ms), of a
+    one-shot render and write of the same walk (ms, the writing before issue #24), and what the
+    step-by-step writing costs beyond it (ms a step)."""
+    from klaw_ocp.io.run_writer import RunWriter
+    spec = walk_spec(config, "multiple-shooting")
+    per_step, finish, once, steps = [], [], [], 1
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory() as out:
+            writer = RunWriter(out, "resolved: true\n", 30)
+            walk = simulate_walk(spec, on_step=writer.step)
+            t0 = time.perf_counter()
+            writer.finish(walk)
+            finish.append(time.perf_counter() - t0)
+            per_step.append(writer.step_s)
+            steps = len(walk.steps)
+        with tempfile.TemporaryDirectory() as out:
+            t0 = time.perf_counter()
+            write_rendered(render_walk(walk, 30), out)
+            once.append(time.perf_counter() - t0)
+    step_s, finish_s, once_s = (statistics.median(v) for v in (per_step, finish, once))
+    return {"step_ms": 1e3 * step_s / steps, "finish_ms": 1e3 * finish_s, "once_ms": 1e3 * once_s,
+            "extra_ms_per_step": 1e3 * (step_s + finish_s - once_s) / steps}
+
+
 def _plots(walk, repeats: int) -> tuple[float, float]:
     """The five plots of ``walk`` rendered in memory: the first time (with matplotlib's import) and
     the median of ``repeats`` more (s)."""
@@ -132,7 +159,7 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False) -> tuple[float,
     return wall, int(stdout.split()[-1]) / 1024.0
 
 
-def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[float, float]) -> str:
+def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[float, float], steps: dict) -> str:
     lines = [f"{'mode':34s} {'steps':>5s} {'build s':>8s} {'dynamics s':>10s} {'pipeline s':>10s} "
              f"{'write s':>8s} {'x real time':>11s}"]
     for r in rows:
@@ -147,6 +174,9 @@ def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[f
     lines.append(f"plots (5 PNGs of the multiple-shooting walk): first {plots[0]:.2f} s (imports matplotlib), "
                  f"then {plots[1]:.2f} s")
     lines.append(f"animation (walk.gif of the natural walk): {animation[0]:.2f} s, {animation[1]:.2f} MB")
+    lines.append(f"step-by-step writing (multiple shooting): {steps['step_ms']:.2f} ms a step, then "
+                 f"{steps['finish_ms']:.0f} ms at the end; a one-shot write {steps['once_ms']:.0f} ms; "
+                 f"{steps['extra_ms_per_step']:.2f} ms a step more")
     lines.append("")
     labels = ("--no-plots, first (compiles kernels)", "--no-plots, cached kernels", "with plots, cached kernels")
     for label, (wall, rss) in zip(labels, cli):
@@ -168,6 +198,7 @@ def main() -> None:
     walk = simulate_walk(walk_spec(config, "multiple-shooting"))
     plots = _plots(walk, args.repeats)
     animation = _animation(walk)
+    steps = _step_writing(config, args.repeats)
     own_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     with tempfile.TemporaryDirectory() as cache:
         cli = [_cold_cli(args.config, cache) for _ in range(2)] + [_cold_cli(args.config, cache, plots=True)]
@@ -179,11 +210,12 @@ def main() -> None:
         "ms_over_ps_time_ratio": ms["pipeline_s"] / ps["pipeline_s"],
         "cold_cli_s": cli[1][0], "first_cold_cli_s": cli[0][0], "cold_cli_plots_s": cli[2][0],
         "plots_first_s": plots[0], "plots_s": plots[1], "animation_s": animation[0], "animation_mb": animation[1],
+        "step_write_ms": steps["step_ms"], "step_write_extra_ms": steps["extra_ms_per_step"],
         "peak_rss_mb": max(rss for _, rss in cli), "benchmark_process_rss_mb": own_rss,
         "walk_s": ms["walked_s"], "modes": rows,
         "machine": {"cpu_count": os.cpu_count(), "pinned_to_one_cpu": not args.all_cores, "python": sys.version.split()[0]},
     }
-    print(_table(rows, cli, plots, animation))
+    print(_table(rows, cli, plots, animation, steps))
     print(f"\nmultiple shooting / plain shooting time: {result['ms_over_ps_time_ratio']:.2f}; "
           f"benchmark process peak RSS {own_rss:.0f} MB")
     for key, op, bound in TARGETS:

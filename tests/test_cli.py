@@ -227,8 +227,8 @@ def test_run_writes_to_results_name_in_the_working_directory(tmp_path):
     r = _cli("run", str(config), "--no-plots", "--quiet", cwd=work, module="klaw_ocp", timeout=300)
     assert r.returncode == 0, r.stderr
     out = work / "results" / "two_steps"
-    assert sorted(p.name for p in out.iterdir()) == ["angles.csv", "config.resolved.yaml", "dynamics.csv", "events.csv",
-                                                   "summary.json", "walk.bvh", "walk.mot"]
+    assert sorted(p.name for p in out.iterdir()) == [".klaw-ocp", "angles.csv", "config.resolved.yaml", "dynamics.csv",
+                                                   "events.csv", "summary.json", "walk.bvh", "walk.mot"]
     assert sorted(p.name for p in work.iterdir()) == ["results"]        # nothing else in the cwd
     assert sorted(p.name for p in elsewhere.iterdir()) == ["two_steps.yaml"]   # nor beside the config
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))

@@ -152,10 +152,11 @@ def test_run_writes_the_plots_and_plot_redraws_them_without_solving(short_config
 def test_no_plots_skips_them_and_removes_stale_ones(short_config, tmp_path):
     out = tmp_path / "o"
     assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 0
+    assert any((out / "plots").iterdir())
     assert main(["run", str(short_config), "--out", str(out), "--quiet", "--no-plots"]) == 0
-    assert not any((out / "plots").iterdir())
+    assert not (out / "plots").exists()          # the rerun replaced the folder whole
     assert main(["run", str(short_config), "--out", str(out), "--quiet", "--set", "output.plots=false"]) == 0
-    assert not any((out / "plots").iterdir())
+    assert not (out / "plots").exists()
 
 
 def test_plot_refuses_a_folder_that_is_not_a_run(tmp_path, capsys):

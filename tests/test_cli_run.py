@@ -36,12 +36,14 @@ def test_run_writes_summary_and_dynamics(short_config, tmp_path, capsys):
 def test_run_failure_writes_completed_steps(short_config, tmp_path, capsys, fail_at_step):
     fail_at_step(1, "swing2", 0.031)
     out = tmp_path / "out"
-    assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 1
+    assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 3
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "step 1" in err[0] and "swing2" in err[0] and "0.031" in err[0]
+    assert "forced for the test" in err[0] and f"written to {out}" in err[0]
     assert "Traceback" not in err[0]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["steps_completed"] == 1 and len(summary["steps"]) == 1
+    assert summary["failure"]["step"] == 1 and summary["failure"]["subphase"] == "swing2"
 
 
 def test_run_bad_config_exits_2(tmp_path, capsys):

@@ -10,7 +10,7 @@ from klaw_ocp.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 FILES = {"README.md", "fig8.png", "fig10.png", "acceleration.png", "comparison.png", "comparison.csv",
-         "numbers.json", "natural_hip_height.png", "natural_gait_diagram.png"}
+         "numbers.json", "natural_hip_height.png", "natural_gait_diagram.png", ".klaw-ocp"}
 
 
 @pytest.fixture(scope="module")
@@ -27,6 +27,7 @@ def test_reproduce_writes_every_figure_and_the_readme(paper):
         assert image.shape[0] > 400 and image.shape[1] > 800
         assert (image[..., :3] < 0.9).mean() > 0.01             # not blank
     assert max(p.stat().st_size for p in paper.iterdir()) < 1_500_000
+    assert not list(paper.parent.glob(f"{paper.name}.partial-*"))       # swapped in, nothing left beside
 
 
 def test_fig10_numbers_are_the_papers(paper):

@@ -209,7 +209,7 @@ def test_failures_are_rows_and_do_not_stop_the_sweep(short_config, tmp_path, cap
     monkeypatch.setattr(StepController, "solve_step", flaky)
     out = tmp_path / "o"
     assert main(["sweep", str(short_config), "--vary", "walk.speed=4:5:0.5", "--workers", "1", "--out", str(out),
-                 "--quiet"]) == 1
+                 "--quiet"]) == 3
     assert capsys.readouterr().out.startswith("3 walks: 1 ok, 1 failed, 1 error;")
     table = _read(out / "sweep.csv")
     failed, error, ok = (dict(zip(HEADER, r)) for r in table[1:])

@@ -1,5 +1,5 @@
-"""Result files are written atomically with the user's normal file mode; summary.json and
-dynamics.csv, written out for speed, are what the json and csv modules write."""
+"""Result files are written atomically with the user's normal file mode; summary.json is the json
+module's; dynamics.csv, written out for speed, is what the csv module writes."""
 import csv
 import io
 import json
@@ -8,9 +8,9 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
 
-from klaw_ocp.io.writers import atomic_write_bytes, atomic_write_text, dynamics_csv, summary_json
+
+from klaw_ocp.io.writers import atomic_write_bytes, atomic_write_text, dynamics_csv, summary_text
 from klaw_ocp.results import COLUMNS
 
 
@@ -28,25 +28,13 @@ def test_files_get_the_users_normal_mode_and_no_temporary_is_left(tmp_path):
 
 
 
-JSON_VALUES = st.recursive(
-    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False, allow_infinity=False) | st.text(),
-    lambda children: st.lists(children, max_size=4) | st.tuples(children, children)
-    | st.dictionaries(st.text(max_size=6), children, max_size=4), max_leaves=30)
-
-
-@settings(max_examples=300, deadline=None)
-@given(JSON_VALUES)
-def test_summary_json_is_json_dumps_with_an_indent_of_two(value):
-    assert summary_json(value) == json.dumps(value, indent=2, allow_nan=False)
-
-
-def test_summary_json_refuses_what_json_refuses():
-    for bad in ({"x": math.nan}, [math.inf]):
-        with pytest.raises(ValueError):
-            summary_json(bad)
-    assert summary_json({1: [np.float64(0.5)]}) == json.dumps({1: [0.5]}, indent=2)     # keys json converts
-    with pytest.raises(TypeError):
-        summary_json({"x": object()})
+def test_the_summary_is_json_dumps_and_the_per_step_summary_its_compact_form():
+    summary = {"name": "w", "x": [1.5, None, True], "steps": [{"a": 1}, {"b": [2.0]}]}
+    assert summary_text(summary) == json.dumps(summary, indent=2, allow_nan=False) + "\n"
+    steps = [json.dumps(step) for step in summary["steps"]]
+    assert summary_text(summary, steps) == json.dumps(summary) + "\n"
+    with pytest.raises(ValueError):
+        summary_text({"x": math.nan})
 
 
 def test_dynamics_csv_is_what_the_csv_module_writes():

@@ -26,7 +26,7 @@ import textwrap
 from dataclasses import dataclass
 from typing import Callable
 
-from .commands import EXIT_USAGE, PROG
+from .commands import EXIT_INTERRUPTED, EXIT_USAGE, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
 from .errors import ConfigError, KlawError, short_repr
 
@@ -167,7 +167,8 @@ def parse(parser: KlawArgumentParser, argv: list[str] | None) -> argparse.Namesp
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``klaw-ocp``; returns the exit code (0 ok, 1 a subphase did not converge, 2 bad input)."""
+    """Run ``klaw-ocp``; returns the exit code (0 ok, 2 bad input, 3 a subphase did not converge,
+    130 Ctrl-C; :mod:`klaw_ocp.commands`)."""
     parser = build_parser()
     try:
         try:
@@ -179,6 +180,9 @@ def main(argv: list[str] | None = None) -> int:
         message = " ".join(str(exc).split("\n"))
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return EXIT_USAGE
+    except KeyboardInterrupt:   # Ctrl-C outside a walk (the commands report their own)
+        print(f"{PROG}: interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # The reader (e.g. `| head`) closed the pipe: stop quietly, as the Python docs advise,
         # and keep the interpreter from failing again when it flushes stdout at exit.

@@ -29,19 +29,94 @@ class ConvergenceError(KlawError, RuntimeError):
     """A subphase boundary-value problem did not meet its final conditions.
 
     Carries the step index, the subphase name and the residual so that a caller can report them
-    and keep the steps completed before it.
+    and keep the steps completed before it; when the solver's solution is known (raised by the
+    step controller), also its ``iterations``, ``path_min``, ``nlp``, whether its trajectory is
+    finite, and the solver's iteration limit, from which :attr:`cause` names the real cause.
     """
 
-    def __init__(self, step: int, subphase: str, residual: float, detail: str = "", partial=None):
+    def __init__(self, step: int, subphase: str, residual: float, detail: str = "", partial=None, *,
+                 iterations: int | None = None, path_min: float | None = None, nlp: str = "",
+                 finite: bool = True, max_iterations: int | None = None, where: str = ""):
         self.step = step
         self.subphase = subphase
         self.residual = residual
         self.detail = detail
         self.partial = partial
-        msg = f"step {step}, subphase {subphase!r}: did not converge (residual {residual:.3g})"
+        self.iterations, self.path_min, self.nlp = iterations, path_min, nlp
+        self.finite, self.max_iterations, self.where = finite, max_iterations, where
+        msg = f"{where}: " if where else ""
+        msg += f"step {step}, subphase {subphase!r}: did not converge (residual {residual:.3g})"
         if detail:
             msg += f": {detail}"
         super().__init__(msg)
+
+    def within(self, where: str) -> "ConvergenceError":
+        """The same failure, its message opening with ``where`` (e.g. the config it walked)."""
+        return ConvergenceError(self.step, self.subphase, self.residual, self.detail, self.partial,
+                                iterations=self.iterations, path_min=self.path_min, nlp=self.nlp,
+                                finite=self.finite, max_iterations=self.max_iterations, where=where)
+
+    @property
+    def cause(self) -> str:
+        """What stopped the solve, in words: NaN or inf, an iteration limit, IPOPT's status, a
+        violated path constraint, an implausible motion, or the final conditions not met
+        (several joined by "; "); the detail itself when the solver's solution is unknown."""
+        return failure_cause(self.residual, self.detail, self.iterations, self.path_min, self.nlp,
+                             self.finite, self.max_iterations)
+
+    def as_dict(self) -> dict:
+        """The failure as summary.json records it (``message``: the solver's own words)."""
+        return {"step": int(self.step), "subphase": str(self.subphase), "residual": _finite(self.residual),
+                "cause": self.cause, "message": self.detail,
+                "iterations": None if self.iterations is None else int(self.iterations),
+                "path_min": _finite(self.path_min), "nlp": self.nlp}
+
+
+#: the margin below which a path constraint counts as violated (the solvers' own)
+PATH_TOLERANCE = 1e-7
+
+
+def failure_cause(residual: float, message: str = "", iterations: int | None = None,
+                  path_min: float | None = None, nlp: str = "", finite: bool = True,
+                  max_iterations: int | None = None) -> str:
+    """Classify a failed subphase solve from what its solution reports (see
+    :attr:`ConvergenceError.cause`); the solvers' behaviour is not changed by it."""
+    import math
+    if iterations is None and path_min is None and not nlp:
+        return message or "final conditions not met"
+    causes = []
+    if not finite or residual is None or not math.isfinite(float(residual)):
+        causes.append("NaN or inf in the solution (the motion diverged)")
+    status = message.strip() if nlp == "ipopt" and message and " " not in message.strip() else ""
+    if status == "Maximum_Iterations_Exceeded":
+        causes.append(f"iteration limit: IPOPT stopped after {iterations} iterations")
+    elif status:
+        causes.append(f"IPOPT: {status}")
+    elif (nlp == "rootfinder" and max_iterations is not None and iterations is not None
+          and iterations >= max_iterations):
+        causes.append(f"iteration limit: {iterations} Newton iterations (solver.max_iterations)")
+    if path_min is not None and math.isfinite(path_min) and path_min < -PATH_TOLERANCE:
+        causes.append(f"path constraint violated by {-path_min:.3g}")
+    if "implausible motion" in message:
+        causes.append("implausible motion (a root far from any walk)")
+    if not causes:
+        causes.append(f"final conditions not met (residual {residual:.3g})")
+    return "; ".join(causes)
+
+
+def _finite(value):
+    import math
+    return float(value) if value is not None and math.isfinite(float(value)) else None
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C: a KeyboardInterrupt whose ``partial`` is what was completed before it: the
+    :class:`~klaw_ocp.walk.Walk` of the completed steps (``status == "interrupted"``) for
+    :func:`~klaw_ocp.walk.simulate_walk`, the finished rows for :func:`~klaw_ocp.sweep.run_sweep`."""
+
+    def __init__(self, partial=None):
+        super().__init__("interrupted")
+        self.partial = partial
 
 
 def finite_real(value) -> float | None:

@@ -61,7 +61,7 @@ def _walk(path: Path, method: str = "multiple-shooting", progress: bool = False)
     try:
         walk = simulate_walk(path, method=method, progress=progress)
     except ConvergenceError as exc:
-        raise ConvergenceError(exc.step, exc.subphase, exc.residual, f"{path.name} ({method}): {exc.detail}") from None
+        raise exc.within(f"{path.name} ({method})") from None
     run = RunData.from_walk(walk)
     run.extra.update(cpu_s=time.process_time() - cpu0, wall_s=time.perf_counter() - wall0, config=path.name)
     return run

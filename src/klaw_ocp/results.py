@@ -43,6 +43,17 @@ def hip_offsets(walk) -> list:
     return [[next(offsets) for _ in step.subphases] for step in walk.steps]
 
 
+def _step_hip_offsets(body, step) -> list:
+    """:func:`hip_offsets` of one step ([subphase]), in one call of the stance kinematics."""
+    offsets = stance_hips(body, np.vstack([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
+    return np.split(offsets, np.cumsum([len(sub.states) for sub in step.subphases])[:-1])
+
+
+def _step_hips(body, step) -> list:
+    """The world hip (n, 2) at every node of every subphase of one step ([subphase])."""
+    return [np.array([step.origin_x, body.l9]) + offsets for offsets in _step_hip_offsets(body, step)]
+
+
 def walk_hips(walk, offsets: list | None = None) -> list:
     """The world hip (n, 2) at every node of every subphase of every step ([step][subphase])
     (``offsets``: the walk's :func:`hip_offsets`, when the caller has them)."""
@@ -128,6 +139,15 @@ def walk_table(walk) -> dict:
             np.concatenate([columns[c] for columns in steps]).astype(float) for c in COLUMNS}
 
 
+def step_table(step, body) -> dict:
+    """The rows of one step in :func:`walk_table`'s columns: a walk's table is its steps' tables
+    one after the other (no row depends on a later step), so a run can write them as they come."""
+    columns = _step_columns(step, _step_hips(body, step))
+    columns["hip_y_ref"] = _hip_reference_curves([step], body, [columns["t"]])[0]
+    return {c: np.array(list(columns[c])) if c == "subphase" else np.asarray(columns[c]).astype(float)
+            for c in COLUMNS}
+
+
 def _finite(value):
     value = float(value)
     return value if math.isfinite(value) else None
@@ -189,37 +209,60 @@ def foot_events(walk) -> list[dict]:
     return sorted(events, key=lambda e: (e["time"], order[e["event"]]))
 
 
-def walk_summary(walk, table: dict | None = None) -> dict:
+def step_summary(spec, step, step_offsets: list | None = None) -> dict:
+    """One step's entry of the summary's ``steps`` (it does not change once the step is solved);
+    ``step_offsets``: its hip offsets (:func:`hip_offsets`), when the caller has them."""
+    if step_offsets is None:
+        step_offsets = _step_hip_offsets(spec.body, step)
+    hips = [np.array([step.origin_x, spec.body.l9]) + offsets for offsets in step_offsets]
+    stance = [sub.name for sub in step.subphases].index("stance")
+    entry = step.plan.as_dict()
+    entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
+                 hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
+                 hip_dip_m=hip_dip(spec.body, step.subphases[stance], step_offsets[stance]), notes=list(step.notes),
+                 swing_foot=swing_foot_clearance(spec.body, step, hips),
+                 curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
+    if step.hip_reference:
+        l9, ref = spec.body.l9, step.hip_reference
+        entry["hip_reference"] = {"y_start_m": ref["y_start"] + l9, "y_end_m": ref["y_end"] + l9,
+                                  "excursion_m": ref["excursion"],
+                                  "floor_m": min(ref["y_start"], ref["y_end"]) + l9}
+    entry["subphases"] = [{
+        "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
+        "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
+        "units": {k: parameter_unit(k) for k in s.parameters},
+        "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
+        "path_min": _finite(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
+        "build_s": float(s.build_s),
+    } for s in step.subphases]
+    return entry
+
+
+#: The summary's fields that time the run and change from run to run (in ``steps[].subphases[]``:
+#: ``wall_s`` and ``build_s``); everything else is the same for the same config.
+TIMING_FIELDS = ("wall_s", "real_time_factor")
+SUBPHASE_TIMING_FIELDS = ("wall_s", "build_s")
+
+
+def walk_summary(walk, table: dict | None = None, steps: list | None = None) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results
-    (``table``: the walk's :func:`walk_table`, when the caller has it already)."""
-    steps = []
-    offsets = hip_offsets(walk) if walk.steps else []
-    for step, step_offsets, hips in zip(walk.steps, offsets, walk_hips(walk, offsets)):
-        stance = [sub.name for sub in step.subphases].index("stance")
-        entry = step.plan.as_dict()
-        entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
-                     hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
-                     hip_dip_m=hip_dip(walk.spec.body, step.subphases[stance], step_offsets[stance]),
-                     notes=list(step.notes), swing_foot=swing_foot_clearance(walk.spec.body, step, hips),
-                     curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
-        if step.hip_reference:
-            l9, ref = walk.spec.body.l9, step.hip_reference
-            entry["hip_reference"] = {"y_start_m": ref["y_start"] + l9, "y_end_m": ref["y_end"] + l9,
-                                      "excursion_m": ref["excursion"],
-                                      "floor_m": min(ref["y_start"], ref["y_end"]) + l9}
-        entry["subphases"] = [{
-            "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
-            "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
-            "units": {k: parameter_unit(k) for k in s.parameters},
-            "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
-            "path_min": _finite(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
-            "build_s": float(s.build_s),
-        } for s in step.subphases]
-        steps.append(entry)
+    (``table``: the walk's :func:`walk_table`, when the caller has it already; ``steps``: the
+    :func:`step_summary` of every step, likewise)."""
+    if steps is None:
+        offsets = hip_offsets(walk) if walk.steps else []
+        steps = [step_summary(walk.spec, step, step_offsets) for step, step_offsets in zip(walk.steps, offsets)]
     hip = (table if table is not None else walk_table(walk)) if walk.steps else None
+    speed = (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
+             if hip is not None and hip["t"][-1] > hip["t"][0] else None)
+    return summary_of(walk, steps, speed)
+
+
+def summary_of(walk, steps: list, mean_hip_speed_kmh) -> dict:
+    """:func:`walk_summary` from its parts: the steps' entries and the mean hip speed (km/h)."""
     spec = walk.spec
     return {
-        "name": spec.name, "status": walk.status, "message": walk.message, "method": spec.method,
+        "name": spec.name, "status": walk.status, "message": walk.message,
+        "failure": getattr(walk, "failure", None), "method": spec.method,
         "solver": {"intervals": spec.intervals, "tolerance": spec.tolerance, "nlp": spec.nlp,
                    "lock_rule": spec.lock_rule, "stance": spec.stance},
         "body": spec.body.as_dict(), "attributes": spec.attributes.as_dict(),
@@ -227,8 +270,8 @@ def walk_summary(walk, table: dict | None = None) -> dict:
         "real_time_factor": walk.duration / walk.wall_s if walk.wall_s > 0 else None,
         "steps_planned": len(spec.plans), "steps_completed": len(walk.steps),
         "start_from_rest": spec.start_from_rest, "end_at_rest": spec.end_at_rest,
-        "mean_hip_speed_kmh": (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
-                               if hip is not None and hip["t"][-1] > hip["t"][0] else None),
+        "mean_hip_speed_kmh": mean_hip_speed_kmh,
+        "solver_messages": list(getattr(walk, "solver_messages", [])),
         "steps": steps,
         "events": foot_events(walk),
     }

@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, ConvergenceError, KlawError, out_of_range
+from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
 
@@ -188,13 +188,21 @@ def _one_line(exc: BaseException, prefix: str = "") -> str:
 
 # ------------------------------------------------------------------------------------ executors
 
+def _ignore_interrupts() -> None:
+    """A local worker leaves Ctrl-C to the sweep's own process, which stops handing out walks and
+    keeps the rows of the walks already running (no traceback from every worker)."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _executor(workers: int, n_tasks: int, address: str | None):
     """A concurrent.futures executor and the dask client behind it (None for the local pool)."""
     if address is None:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         context = multiprocessing.get_context("spawn")  # never fork a process that holds CasADi objects
-        return ProcessPoolExecutor(max_workers=min(workers, n_tasks), mp_context=context), None
+        return ProcessPoolExecutor(max_workers=min(workers, n_tasks), mp_context=context,
+                                   initializer=_ignore_interrupts), None
     try:
         from distributed import Client
     except ImportError:
@@ -208,14 +216,17 @@ def _executor(workers: int, n_tasks: int, address: str | None):
 
 
 def run_sweep(config, vary: dict, methods=None, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = False) -> list[dict]:
+              progress: bool = False, on_row=None) -> list[dict]:
     """Walk every combination of ``vary`` (path -> list of values) with ``methods``.
 
     ``config`` is a mapping or a YAML path; ``methods`` None (the config's solver.method), a
     method name, "both" or a sequence. ``workers`` (default ``os.cpu_count()``) local processes,
     1 = in this process; ``scheduler`` a dask.distributed address (``workers`` is then the
     cluster's business). Every combination is validated first. Returns one row per walk and
-    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`.
+    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(rows)``, if
+    given, is called after each walk with the rows finished so far (in grid order): ``klaw-ocp
+    sweep`` rewrites sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
+    ``partial`` is the rows finished (the walks running in local workers are waited for).
     """
     _, tasks = expand(config, vary, methods)
     workers = (os.cpu_count() or 1) if workers is None else workers
@@ -224,41 +235,63 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     from tqdm import tqdm
 
     results: list[dict | None] = [None] * len(tasks)
+
+    def finished() -> list[dict]:
+        return [{**task["values"], **result} for task, result in zip(tasks, results) if result is not None]
+
+    def done(i: int, row: dict) -> None:
+        results[i] = row
+        bar.update()
+        if on_row is not None:
+            on_row(finished())
+
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:
         if scheduler is None and (workers == 1 or len(tasks) == 1):
             for i, task in enumerate(tasks):
-                results[i] = run_walk(task["mapping"], task["method"])
-                bar.update()
+                done(i, run_walk(task["mapping"], task["method"]))
         else:
             executor, client = _executor(workers, len(tasks), scheduler)
             try:
-                _run_on(executor, tasks, results, bar)
+                _run_on(executor, tasks, done)
             finally:
                 executor.shutdown(wait=True)
                 if client is not None:
                     client.close()
+    except KeyboardInterrupt as err:
+        raise Interrupted(finished()) from err
     finally:
         bar.close()
-    return [{**task["values"], **result} for task, result in zip(tasks, results)]
+    return finished()
 
 
-def _run_on(executor, tasks: list[dict], results: list, bar) -> None:
+def _run_on(executor, tasks: list[dict], done) -> None:
     from concurrent.futures import as_completed
 
     futures = {executor.submit(run_walk, task["mapping"], task["method"]): i for i, task in enumerate(tasks)}
+
+    def result(future, i):
+        try:
+            return future.result()
+        except Exception as exc:  # noqa: BLE001 - a worker process died or the cluster lost the task
+            return {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": "error",
+                    "message": _one_line(exc, f"worker: {type(exc).__name__}")}
+
+    seen = set()
     try:
         for future in as_completed(futures):
-            i = futures[future]
-            try:
-                results[i] = future.result()
-            except Exception as exc:  # noqa: BLE001 - a worker process died or the cluster lost the task
-                results[i] = {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": "error",
-                              "message": _one_line(exc, f"worker: {type(exc).__name__}")}
-            bar.update()
-    except BaseException:  # Ctrl-C: drop the walks not started yet, then let shutdown wait for the rest
+            done(futures[future], result(future, futures[future]))
+            seen.add(future)
+    except BaseException:  # Ctrl-C: drop the walks not started yet, keep the rows of those running
         for future in futures:
             future.cancel()
+        for future, i in futures.items():
+            if future not in seen and not future.cancelled():
+                try:
+                    row = result(future, i)      # waits for the walk (its worker ignores Ctrl-C)
+                except BaseException:            # noqa: BLE001 - Ctrl-C again: stop waiting
+                    break
+                done(i, row)
         raise
 
 

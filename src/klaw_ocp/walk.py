@@ -24,10 +24,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .body import Body
+from .console import CasadiMessages, DeferredInterrupt
 from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
 from .dynamics import heel_strike_map, stance_hip
-from .errors import ConvergenceError
+from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, hind_foot_at_rest
 from .solvers import make_solver
 
@@ -52,13 +53,18 @@ class WalkSpec:
 
 @dataclass
 class Walk:
-    """A simulated walk: the solved steps in order, and how the run ended."""
+    """A simulated walk: the solved steps in order, and how the run ended (``status``: "ok",
+    "failed" or "interrupted")."""
     spec: WalkSpec
     steps: list = field(default_factory=list)
     status: str = "ok"
     message: str = ""
     wall_s: float = 0.0
     initial_state: np.ndarray | None = None
+    #: why a failed walk stopped (:meth:`klaw_ocp.errors.ConvergenceError.as_dict`), else None
+    failure: dict | None = None
+    #: CasADi's warnings during the walk, each once, without their date (klaw_ocp.console)
+    solver_messages: list = field(default_factory=list)
 
     @property
     def duration(self) -> float:
@@ -120,16 +126,29 @@ def _excursion(body: Body, attrs, y_start: float, y_end: float) -> float:
     return max(midstance - max(y_start, y_end), attrs.min_hip_excursion_rel * body.l1)
 
 
-def simulate_walk(spec, method: str | None = None, progress: bool = False, raise_on_failure: bool = True) -> Walk:
+def simulate_walk(spec, method: str | None = None, progress: bool = False, raise_on_failure: bool = True,
+                  on_step=None) -> Walk:
     """Run the walk step by step. ``spec`` is a :class:`WalkSpec`, an experiment configuration,
     a mapping in the configuration's shape, or the path of a YAML configuration file; ``method``
     overrides the configured solver. On a subphase that does not converge, raise
     :class:`ConvergenceError` (naming step, subphase, residual) whose ``partial`` is the
-    :class:`Walk` of the steps completed before it; with ``raise_on_failure=False`` return that
-    walk with ``status == "failed"`` instead. Every argument is checked before anything is built
-    or solved: a bad one raises :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what
-    is allowed; :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk
-    outside the supported envelope)."""
+    :class:`Walk` of the steps completed before it (its ``failure`` the error's
+    :meth:`~klaw_ocp.errors.ConvergenceError.as_dict`); with ``raise_on_failure=False`` return
+    that walk with ``status == "failed"`` instead. Ctrl-C raises
+    :class:`~klaw_ocp.errors.Interrupted` (a KeyboardInterrupt) whose ``partial`` is the walk
+    of the completed steps, ``status == "interrupted"``.
+
+    Ctrl-C waits for the end of the step being solved, and CasADi's warnings go to
+    ``walk.solver_messages`` rather than to the terminal (:mod:`klaw_ocp.console`).
+
+    ``on_step(walk)``, if given, is called after each step is complete (``walk.steps[-1]`` the
+    step just solved, ``walk.wall_s`` the simulation time so far): ``klaw-ocp run`` writes the
+    step's rows there. The time spent in it is not counted in ``wall_s``.
+
+    Every argument is checked before anything is built or solved: a bad one raises
+    :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what is allowed;
+    :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk outside the
+    supported envelope)."""
     spec = _checked_spec(spec, method, progress, raise_on_failure)
     wall0 = time.perf_counter()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
@@ -137,34 +156,62 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     gains = control_gains(spec.body, spec.attributes)
     controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule, spec.stance)
     walk = Walk(spec)
+    outside = 0.0       # seconds spent in on_step, kept out of wall_s
     iterator = range(len(spec.plans))
+    bar = None
     if progress:
         from tqdm import tqdm
-        iterator = tqdm(iterator, desc=f"{spec.name} ({spec.method})", unit="step")
+        iterator = bar = tqdm(iterator, desc=f"{spec.name} ({spec.method})", unit="step")
+    interrupts, messages = DeferredInterrupt(), CasadiMessages()
     try:
-        inp = _first_input(controller, spec)
-        walk.initial_state = inp.x0.copy()
-        plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
-        # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes the
-        # next step's hind leg, whose toe-off starts that step's swing1
-        inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x)
-        for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
-            plan = plans[k]
-            result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
-            if walk.steps:   # this step's double support completed the previous stance leg
-                walk.steps[-1].complete_stance_leg(result)
-            walk.steps.append(result)
-            inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
-            result.stance_foot = stance_leg_rules(spec, result)
-            if inp is not None:
-                inp.hind_foot = result.stance_foot
+        with interrupts, messages:
+            inp = _first_input(controller, spec)
+            walk.initial_state = inp.x0.copy()
+            plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
+            # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
+            # the next step's hind leg, whose toe-off starts that step's swing1
+            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x)
+            for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
+                interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
+                plan = plans[k]
+                result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
+                next_inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
+                result.stance_foot = stance_leg_rules(spec, result)
+                if next_inp is not None:
+                    next_inp.hind_foot = result.stance_foot
+                # the step is complete: only now does the walk hold it (an interrupt above leaves
+                # the walk as it was after the previous step)
+                if walk.steps:   # this step's double support completed the previous stance leg
+                    walk.steps[-1].complete_stance_leg(result)
+                walk.steps.append(result)
+                inp = next_inp
+                if on_step is not None:
+                    t0 = time.perf_counter()
+                    walk.wall_s = t0 - wall0 - outside
+                    on_step(walk)
+                    outside += time.perf_counter() - t0
+            interrupts.check()
     except ConvergenceError as err:
-        walk.status, walk.message, walk.wall_s = "failed", str(err), time.perf_counter() - wall0
+        walk.wall_s = time.perf_counter() - wall0 - outside
+        walk.solver_messages = list(messages.messages)
+        if interrupts.pressed:      # a second Ctrl-C inside IPOPT fails the solve: it is an interrupt
+            walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
+            raise Interrupted(walk) from None
+        walk.status, walk.message, walk.failure = "failed", str(err), err.as_dict()
         err.partial = walk
         if raise_on_failure:
             raise
         return walk
-    walk.wall_s = time.perf_counter() - wall0
+    except KeyboardInterrupt as err:
+        walk.wall_s = time.perf_counter() - wall0 - outside
+        walk.solver_messages = list(messages.messages)
+        walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
+        raise Interrupted(walk) from err
+    finally:
+        if bar is not None:
+            bar.close()      # the bar's line ends before any message that follows
+    walk.wall_s = time.perf_counter() - wall0 - outside
+    walk.solver_messages = list(messages.messages)
     return walk
 
 

@@ -9,12 +9,12 @@ picture (:mod:`klaw_ocp.io.compare_plot`) only read results.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..errors import ConfigError, out_of_range
-from . import EXIT_NOT_CONVERGED, EXIT_OK, PROG
+from . import EXIT_OK
 from ._common import add_set_option, check_output_dir, load, resolved_header
+from .run import add_force_option, keeping, report_unfinished
 
 HELP = "compare runs: solver modes, stance formulations, configs or finished results folders"
 METHODS = ("multiple-shooting", "plain-shooting")
@@ -29,8 +29,9 @@ def configure(p: argparse.ArgumentParser) -> None:
                      "step, subphase and run: the torque-profile parameters with units, residual, "
                      "iterations, solve time, and the differences to the first run) and "
                      "comparison.png to --out (default results/<name>-compare/), each solved run to "
-                     "<out>/runs/, and prints the largest differences. Exit code 1 if a walk did not "
-                     "converge (the others are still compared).")
+                     "<out>/runs/, and prints the largest differences. Exit code 3 if a walk did not "
+                     "converge (the others are still compared; the earlier results stay and the new "
+                     "ones are kept beside them), 130 on Ctrl-C.")
     p.epilog = ("examples:\n  klaw-ocp compare configs/natural_walk.yaml\n"
                 "  klaw-ocp compare configs/natural_walk.yaml --method multiple-shooting --stance monitored,tracking\n"
                 "  klaw-ocp compare configs/short_steps.yaml configs/long_steps.yaml\n"
@@ -44,6 +45,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                         "each config's solver.stance)")
     add_set_option(p)
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/<first name>-compare/)")
+    add_force_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
@@ -93,48 +95,78 @@ def plan_runs(args: argparse.Namespace) -> list[dict]:
 def handle(args: argparse.Namespace) -> int:
     from ..compare import comparison_csv, comparison_rows, comparison_stats, comparison_table
     from ..io import RunData, write_rendered
-    from ..io.compare_plot import comparison_figure
-    from ..io.plot_style import png_bytes
+    from ..io.results_folder import StagedFolder
 
     planned = plan_runs(args)           # every input checked before the first walk
     first = planned[0]
     name = first["config"].name if "config" in first else RunData.from_folder(first["folder"], "INPUT").name
     out = check_output_dir(args.out if args.out is not None else Path("results") / f"{name}-compare",
                            "--out")
+    staged = StagedFolder(out, "compare", force=args.force)     # refused here, before any solving
+    staging = staged.open()
     runs, failed = [], []
-    for item in planned:
-        if "folder" in item:
-            runs.append(RunData.from_folder(item["folder"], what="INPUT"))
-            continue
-        run, failure = _solve(item, out, quiet=args.quiet)
-        runs.append(run)
-        if failure:
-            failed.append(failure)
-    rows = comparison_rows(runs)
-    files = {"csv": ("comparison.csv", comparison_csv(rows).encode("utf-8")),
-             "png": ("comparison.png", png_bytes(comparison_figure(runs)))}
-    paths = write_rendered(files, out)
+    with keeping(staged, lambda: "the runs solved so far"):
+        solved = 0
+        for item in planned:
+            if "folder" in item:
+                runs.append(RunData.from_folder(item["folder"], what="INPUT"))
+                _carry_over(item["folder"], staged, staging)
+                continue
+            run, outcome, failure = _solve(item, staging, quiet=args.quiet)
+            if outcome == "interrupted":
+                return report_unfinished(staged, outcome, None, f"{solved} solved run(s) and the interrupted one")
+            solved += 1
+            runs.append(run)
+            if failure is not None:
+                failed.append(failure)
+        from ..io.compare_plot import comparison_figure
+        from ..io.plot_style import png_bytes
+        try:
+            rows = comparison_rows(runs)
+            files = {"csv": ("comparison.csv", comparison_csv(rows).encode("utf-8")),
+                     "png": ("comparison.png", png_bytes(comparison_figure(runs)))}
+            write_rendered(files, staging)
+        except KeyboardInterrupt:
+            return report_unfinished(staged, "interrupted", None, "every run solved (the comparison not drawn)")
     print(comparison_table(comparison_stats(runs)))
-    print(f"wrote {paths['csv']} and {paths['png']}")
-    for message in failed:
-        print(f"{PROG}: error: {message}", file=sys.stderr)
-    return EXIT_NOT_CONVERGED if failed else EXIT_OK
+    if failed:
+        # the comparison is written, but of a walk that stopped early: the earlier results stay
+        return report_unfinished(staged, "failed", "; ".join(failed), "every run and the comparison")
+    staged.commit()
+    print(f"wrote {out / 'comparison.csv'} and {out / 'comparison.png'}")
+    return EXIT_OK
 
 
-def _solve(item: dict, out: Path, quiet: bool):
-    """Walk one planned config run and write it to ``out/runs/``; returns (RunData, failure or None)."""
-    from ..errors import ConvergenceError
-    from ..io import RunData
-    from ..walk import simulate_walk, walk_spec
-    from .run import write_run
+def _carry_over(folder: Path, staged, staging: Path) -> None:
+    """An INPUT folder inside --out (``compare results/x-compare/runs/*``) would go with the folder
+    it is in: copy it to the same place in the new one."""
+    import os
+    import shutil
+    source = Path(os.path.realpath(folder))
+    try:
+        rel = source.relative_to(staged.target)
+    except ValueError:
+        return
+    if rel.parts and not (staging / rel).exists():
+        shutil.copytree(source, staging / rel, symlinks=True)
+
+
+def _solve(item: dict, staging: Path, quiet: bool):
+    """Walk one planned config run into ``staging/runs/`` as ``run`` writes it (without plots),
+    step by step; returns (RunData, outcome, failure sentence or None)."""
+    from ..io.results_folder import mark_folder
+    from ..io.run_writer import RunWriter
+    from ..walk import walk_spec
+    from .run import failure_sentence, finish_into, walk_into
 
     config = item["config"]
-    failure = None
-    try:
-        walk = simulate_walk(walk_spec(config), progress=not quiet)
-    except ConvergenceError as exc:
-        walk, failure = exc.partial, f"{item['path']} ({item['method']}, {item['stance']} stance): {exc}"
-    folder = out / RUNS_DIR / f"{config.name}-{item['method']}-{item['stance']}"
+    folder = staging / RUNS_DIR / f"{config.name}-{item['method']}-{item['stance']}"
+    folder.mkdir(parents=True, exist_ok=True)
     header = resolved_header(item["path"], item["sets"], item["method"], item["stance"])
-    write_run(walk, config.resolved_yaml(header), folder, config.output.fps, plots=False)
-    return RunData.from_walk(walk), failure
+    writer = RunWriter(folder, config.resolved_yaml(header), config.output.fps)
+    walk, outcome, failure = walk_into(writer, walk_spec(config), quiet)
+    _, _, outcome, run = finish_into(writer, walk, outcome)
+    mark_folder(folder, "run")
+    text = (f"{item['path']} ({item['method']}, {item['stance']} stance): {failure_sentence(failure)}"
+            if outcome == "failed" else None)
+    return run, outcome, text

@@ -6,6 +6,7 @@ import argparse
 import time
 
 from . import EXIT_OK
+from .run import add_force_option, keeping, report_unfinished
 
 HELP = "regenerate results/paper/: the paper's figures 8 and 10 and its numbers beside ours"
 
@@ -20,15 +21,28 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--configs", default="configs", metavar="DIR",
                    help="the folder with the shipped configs (default: configs)")
     p.add_argument("--out", default="results/paper", metavar="DIR", help="output folder (default: results/paper)")
+    add_force_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
 def handle(args: argparse.Namespace) -> int:
-    from ..reproduce import reproduce
+    from ..errors import ConvergenceError
+    from ..io.results_folder import StagedFolder
+    from ..reproduce import check_configs, reproduce
     from ._common import check_output_dir
-    check_output_dir(args.out, "--out")
     t0 = time.perf_counter()
-    written = reproduce(args.configs, args.out, progress=not args.quiet)
-    print(f"reproduced the paper in {time.perf_counter() - t0:.1f} s: wrote {len(written)} files to {args.out}/ "
-          f"(see {written['readme']})")
+    out = check_output_dir(args.out, "--out")
+    check_configs(args.configs)                                   # before any walk
+    staged = StagedFolder(out, "reproduce", force=args.force)    # refused here, before any walk
+    staging = staged.open()
+    with keeping(staged, lambda: "what was drawn"):
+        try:
+            written = reproduce(args.configs, staging, progress=not args.quiet)
+        except ConvergenceError as exc:
+            return report_unfinished(staged, "failed", exc, "the figures drawn so far")
+        except KeyboardInterrupt:
+            return report_unfinished(staged, "interrupted", None, "the figures drawn so far")
+    staged.commit()
+    print(f"reproduced the paper in {time.perf_counter() - t0:.1f} s: wrote {len(written)} files to {out}/ "
+          f"(see {out / written['readme'].name})")
     return EXIT_OK

@@ -9,21 +9,28 @@ folded in and every default filled in: running it again gives the same ``dynamic
 and, unless ``--no-plots`` or ``output.plots: false``, the plots of :mod:`klaw_ocp.io.plots` in
 ``plots/``; with ``output.animation: true`` (the shipped configs) and without ``--no-animation``,
 ``walk.gif`` (:mod:`klaw_ocp.io.animation`, docs/gif.md), after the plots and independent of them.
+
+Each step is written as it completes (:class:`klaw_ocp.io.run_writer.RunWriter`, the walk's
+``on_step``) into a folder beside the results folder, which replaces it whole when the walk ends
+(:class:`klaw_ocp.io.results_folder.StagedFolder`); a walk that fails (exit 3) or is interrupted
+(exit 130) keeps its completed steps and leaves earlier results untouched. The helpers below
+(:func:`walk_into`, :func:`finish_into`, :func:`report_unfinished`, :func:`keeping`) are shared by
+``compare``, ``sweep`` and ``reproduce``; docs/experiments.md has the rules.
 """
 from __future__ import annotations
 
 import argparse
 import sys
-import time
+from contextlib import contextmanager
 from pathlib import Path
 
-from . import EXIT_NOT_CONVERGED, EXIT_OK, PROG
+from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
 from ._common import add_set_option, check_output_dir, check_plots, load, resolved_header
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
 VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
 PLOT_HELP = "redraw the plots of a finished results folder, solving nothing"
-RESOLVED_FILE = "config.resolved.yaml"
+RESOLVED_FILE = "config.resolved.yaml"    # = klaw_ocp.io.run_writer's (not imported here: it loads CasADi)
 PLOTS_DIR = "plots"
 GIF_FILE = "walk.gif"        # = klaw_ocp.io.animation.GIF_FILE (not imported here: it loads matplotlib)
 
@@ -32,9 +39,11 @@ def configure_run(p: argparse.ArgumentParser) -> None:
     p.description = ("Simulate the configured walk step by step and write summary.json, dynamics.csv, "
                      "events.csv, angles.csv (the body's 56 angles at every frame), config.resolved.yaml, "
                      "the plots (plots/*.png) and, with output.animation, walk.gif to --out (default "
-                     "results/<name>/). A subphase that does not converge is reported on one line "
-                     "(step, subphase, residual); the steps completed before it are still written, "
-                     "and the exit code is 1.")
+                     "results/<name>/). Each step is written as it completes, into a folder beside --out "
+                     "that replaces the earlier results when the walk ends. A subphase that does not "
+                     "converge is reported on one line (step, subphase, residual, cause) and exits 3; "
+                     "Ctrl-C exits 130; either way the completed steps are kept, and earlier results "
+                     "stay untouched.")
     p.epilog = ("example: klaw-ocp run configs/natural_walk.yaml --set walk.speed=4 "
                 "--method plain-shooting --out /tmp/slow")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
@@ -50,7 +59,14 @@ def configure_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-plots", action="store_true", help="skip the plots (as output.plots: false)")
     p.add_argument("--no-animation", action="store_true",
                    help="skip walk.gif (as output.animation: false; the plots are not affected)")
+    add_force_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_force_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--force", action="store_true",
+                   help="write into --out even if it is a non-empty folder klaw-ocp did not write (its "
+                        "other files are kept; klaw-ocp's replace those of the same name)")
 
 
 def handle_run(args: argparse.Namespace) -> int:
@@ -58,20 +74,20 @@ def handle_run(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out if args.out is not None else config.output_dir(),
                            "--out" if args.out is not None else "output.dir")
     check_plots(config, config.output.plots and not args.no_plots)
-    from ..errors import ConvergenceError
-    from ..walk import simulate_walk, walk_spec     # the solvers: only for a valid run
-    failure = None
-    try:
-        walk = simulate_walk(walk_spec(config), progress=not args.quiet)
-    except ConvergenceError as exc:
-        walk, failure = exc.partial, exc
+    from ..io.results_folder import StagedFolder        # the solvers: only for a valid run
+    from ..io.run_writer import RunWriter
+    from ..walk import walk_spec
+    staged = StagedFolder(out, "run", force=args.force)        # refused here, before any solving
     header = resolved_header(args.config, args.sets, args.method, args.stance, args.fps)
-    paths, times = write_run(walk, config.resolved_yaml(header), out, config.output.fps,
-                             plots=config.output.plots and not args.no_plots,
-                             animation=config.output.animation and not args.no_animation)
-    if failure is not None:
-        print(f"{PROG}: error: {failure}; {len(walk.steps)} completed step(s) written to {out}", file=sys.stderr)
-        return EXIT_NOT_CONVERGED
+    writer = RunWriter(staged.open(), config.resolved_yaml(header), config.output.fps)
+    with keeping(staged, lambda: f"{len(writer.done)} completed step(s)"):
+        walk, outcome, failure = walk_into(writer, walk_spec(config), quiet=args.quiet)
+        paths, times, outcome, _ = finish_into(writer, walk, outcome,
+                                            plots=config.output.plots and not args.no_plots,
+                                            animation=config.output.animation and not args.no_animation)
+    if outcome != "ok":
+        return report_unfinished(staged, outcome, failure, f"{len(walk.steps)} completed step(s)")
+    staged.commit()
     rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
     n_plots = sum(path.parent.name == PLOTS_DIR for path in paths.values())
     plots = f"; {n_plots} plots in {times['plots']:.2f} s" if times["plots"] is not None else ""
@@ -82,42 +98,82 @@ def handle_run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def write_run(walk, resolved_yaml: str, out: Path, fps: float, plots: bool = True,
-              animation: bool = False) -> tuple[dict, dict]:
-    """Write a walk's result files (each atomically; the body's angles at ``fps``), with ``plots``
-    its plots and with ``animation`` its walk.gif; returns the paths by name and the drawing times
-    {"plots": s, "animation": s} (None for what was not drawn). Plots or a walk.gif left in ``out``
-    by an earlier run and not drawn again are removed: they would show another walk."""
-    from ..io import RunData, render_run, write_rendered
-    run = RunData.from_walk(walk, fps=fps)
-    files = render_run(run)
-    files["resolved"] = (RESOLVED_FILE, resolved_yaml.encode("utf-8"))
-    paths = write_rendered(files, out)
-    times = {"plots": None, "animation": None}
-    if plots and walk.steps:
-        t0 = time.perf_counter()
-        from ..io.plots import render_plots
-        paths.update(write_rendered(render_plots(run), out / PLOTS_DIR))
-        times["plots"] = time.perf_counter() - t0
-    else:
-        _remove_stale_plots(out / PLOTS_DIR)
-    gif = None
-    if animation and walk.steps:
-        t0 = time.perf_counter()
-        from ..io.animation import write_animation
-        gif = write_animation(run, out / GIF_FILE)
-        times["animation"] = time.perf_counter() - t0 if gif is not None else None
-    if gif is None:
-        (out / GIF_FILE).unlink(missing_ok=True)
-    else:
-        paths["animation"] = gif
-    return paths, times
+def walk_into(writer, spec, quiet: bool = True):
+    """Walk ``spec`` with ``writer`` writing each step as it completes; returns (walk, outcome,
+    failure): outcome "ok", "failed" (failure: the ConvergenceError) or "interrupted"."""
+    from ..errors import ConvergenceError
+    from ..walk import Walk, simulate_walk
+    try:
+        return simulate_walk(spec, progress=not quiet, on_step=writer.step), "ok", None
+    except ConvergenceError as exc:
+        return exc.partial, "failed", exc
+    except KeyboardInterrupt as exc:      # klaw_ocp.errors.Interrupted, or Ctrl-C before the first step
+        walk = getattr(exc, "partial", None)
+        if walk is None:
+            walk = Walk(spec, status="interrupted", message="interrupted (Ctrl-C)")
+        return walk, "interrupted", None
 
 
-def _remove_stale_plots(folder: Path) -> None:
-    # plots/ is ours (run and plot write it): every PNG in it was drawn from an earlier walk
-    for png in folder.glob("*.png") if folder.is_dir() else ():
-        png.unlink(missing_ok=True)
+def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool = False):
+    """:meth:`RunWriter.finish` of a walk that ended with ``outcome`` (an interrupted one without
+    plots or walk.gif); Ctrl-C while it writes makes the run "interrupted" and writes the summary
+    only. Returns (paths, times, outcome, the walk's RunData or None if interrupted here)."""
+    interrupted = outcome == "interrupted"
+    try:
+        paths, times, run = writer.finish(walk, plots=plots and not interrupted,
+                                          animation=animation and not interrupted)
+        return paths, times, outcome, run
+    except KeyboardInterrupt:
+        walk.status, walk.message = "interrupted", "interrupted (Ctrl-C) while writing the results"
+        try:
+            writer.finish(walk, body=False)
+        except KeyboardInterrupt:
+            pass
+        return {}, {"plots": None, "animation": None}, "interrupted", None
+
+
+@contextmanager
+def keeping(staged, what):
+    """Any other exception (a bug, a full disk): keep what was written as a failed run keeps it,
+    say where on one line, and let the exception go on (with its traceback). ``what()`` says how
+    much was written. A KlawError (bad input found late, e.g. a sweep's grid) goes on to its own
+    one line, what was written kept without a word."""
+    from ..errors import KlawError
+    try:
+        yield
+    except KlawError:
+        staged.keep()
+        raise
+    except Exception as exc:
+        from ..io.results_folder import kept_phrase
+        kept = staged.keep()
+        where = kept_phrase(kept, staged) if kept is None else f"{what()} {kept_phrase(kept, staged)}"
+        text = " ".join(str(exc).split())[:200]
+        print(f"{PROG}: error: unexpected {type(exc).__name__}" + (f" ({text})" if text else "") + f"; {where}",
+              file=sys.stderr)
+        raise
+
+
+def report_unfinished(staged, outcome: str, failure, what: str) -> int:
+    """Keep the results of a command that failed (``failure``: the ConvergenceError, or a
+    sentence) or was interrupted, print its one line and return its exit code."""
+    from ..io.results_folder import kept_phrase
+    kept = staged.keep()
+    where = kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
+    if outcome == "failed":
+        print(f"{PROG}: error: {failure_sentence(failure)}; {where}", file=sys.stderr)
+        return EXIT_SOLVER_FAILED
+    print(f"{PROG}: interrupted (Ctrl-C); {where}", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def failure_sentence(failure) -> str:
+    """A ConvergenceError in words: its step, subphase and residual, then its real cause."""
+    if isinstance(failure, str) or not hasattr(failure, "cause"):
+        return " ".join(str(failure).split())
+    where = f"{failure.where}: " if failure.where else ""
+    return (f"{where}step {failure.step}, subphase {failure.subphase!r}: did not converge "
+            f"(residual {failure.residual:.3g}): {failure.cause}")
 
 
 def configure_validate(p: argparse.ArgumentParser) -> None:

@@ -6,7 +6,8 @@ import os
 import sys
 
 from ..errors import ConfigError
-from . import EXIT_NOT_CONVERGED, PROG
+from . import EXIT_OK, EXIT_SOLVER_FAILED, PROG
+from .run import add_force_option, keeping, report_unfinished
 
 HELP = "walk a grid of config values and write sweep.csv and sweep.png"
 
@@ -17,7 +18,8 @@ def configure(p: argparse.ArgumentParser) -> None:
                      "and sweep.png (a convergence and wall-time map) to --out (default "
                      "results/<name>-sweep/). Every combination is validated before any walk "
                      "starts; a walk that fails does not stop the others. Exit code 0 if every "
-                     "walk converged, 1 otherwise, 2 for bad input. See docs/sweep.md.")
+                     "walk converged, 3 otherwise (the sweep is still written), 2 for bad input, 130 "
+                     "for Ctrl-C (the finished walks are kept). See docs/sweep.md.")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
     p.add_argument("--vary", action="append", required=True, metavar="PATH=VALUES",
                    help="a dotted config path (walk.speed, body.height, attributes.trunk_lean, "
@@ -32,12 +34,17 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help='run the walks on a dask.distributed cluster (tcp://host:8786); needs '
                         'pip install -e ".[cluster]"')
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/<name>-sweep/)")
+    add_force_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.epilog = "example: klaw-ocp sweep configs/natural_walk.yaml --vary walk.speed=1:7:1 --method both"
 
 
 def handle(args: argparse.Namespace) -> int:
-    from ..sweep import counts, default_out_dir, parse_vary, run_sweep, summary_line, write_sweep
+    from ..config_paths import format_value
+    from ..errors import Interrupted
+    from ..io.results_folder import StagedFolder
+    from ..io.writers import atomic_write_text
+    from ..sweep import counts, default_out_dir, parse_vary, run_sweep, summary_line, sweep_csv, write_sweep
 
     vary: dict[str, list] = {}
     for text in args.vary:
@@ -46,12 +53,37 @@ def handle(args: argparse.Namespace) -> int:
             raise ConfigError(f"--vary {path}: got the path twice, allowed each path once")
         vary[path] = values
     from ._common import check_output_dir
-    check_output_dir(args.out if args.out is not None else default_out_dir(args.config),
-                     "--out")
-    rows = run_sweep(args.config, vary, methods=args.method, workers=args.workers,
-                     scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty())
-    out = args.out if args.out is not None else default_out_dir(args.config)
-    paths = write_sweep(rows, list(vary), out, title=f"{PROG} sweep {os.path.basename(args.config)}")
-    print(summary_line(rows, paths))
+    out = check_output_dir(args.out if args.out is not None else default_out_dir(args.config), "--out")
+    staged = StagedFolder(out, "sweep", force=args.force)       # refused here, before any walk
+
+    def on_row(rows):          # sweep.csv grows walk by walk (the staging folder opens with the first)
+        if staged.path is None:
+            staged.open()
+        atomic_write_text(staged.path / "sweep.csv", sweep_csv(rows, list(vary)), durable=False)
+
+    with keeping(staged, lambda: "the walks finished so far"):
+        try:
+            rows = run_sweep(args.config, vary, methods=args.method, workers=args.workers,
+                             scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),
+                             on_row=on_row)
+        except Interrupted as exc:
+            if exc.partial:
+                on_row(exc.partial)
+            return report_unfinished(staged, "interrupted", None, f"{len(exc.partial)} finished walk(s)")
+        if staged.path is None:
+            staged.open()
+        try:
+            write_sweep(rows, list(vary), staged.path, title=f"{PROG} sweep {os.path.basename(args.config)}")
+        except KeyboardInterrupt:
+            return report_unfinished(staged, "interrupted", None, f"all {len(rows)} walks (sweep.png not drawn)")
+    staged.commit()
+    print(summary_line(rows, {"csv": out / "sweep.csv", "png": out / "sweep.png"}))
     n = counts(rows)
-    return 0 if n["ok"] == len(rows) else EXIT_NOT_CONVERGED
+    if n["ok"] == len(rows):
+        return EXIT_OK
+    # a walk that does not converge is one of the sweep's results: the folder is complete
+    first = next(r for r in rows if r["status"] != "ok")
+    label = ", ".join(f"{k}={format_value(first[k])}" for k in vary)
+    print(f"{PROG}: error: {len(rows) - n['ok']} of {len(rows)} walks did not converge or failed, the first "
+          f"{label} ({first['method']}): {first['message']}; see {out / 'sweep.csv'}", file=sys.stderr)
+    return EXIT_SOLVER_FAILED

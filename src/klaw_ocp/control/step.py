@@ -154,7 +154,10 @@ class StepController:
         problem, the node states to start the next step from."""
         solution = self.solver.solve(problem)
         if not solution.success:
-            raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message)
+            raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message,
+                                   iterations=solution.iterations, path_min=solution.path_min, nlp=solution.nlp,
+                                   finite=bool(np.all(np.isfinite(solution.states))),
+                                   max_iterations=getattr(self.solver, "max_iterations", None))
         if remember:
             self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
             if problem.optimize:

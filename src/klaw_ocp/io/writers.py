@@ -1,4 +1,5 @@
-"""Result files of ``klaw-ocp run``, written atomically (temporary file, then rename).
+"""Result files of ``klaw-ocp run``, written atomically (temporary file, then rename); a run
+writes them step by step through :mod:`klaw_ocp.io.run_writer`, the same bytes.
 
 - ``summary.json``: :func:`klaw_ocp.results.walk_summary`.
 - ``dynamics.csv``: :func:`klaw_ocp.results.walk_table`, one row per time sample.
@@ -11,10 +12,8 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 import tempfile
-from json.encoder import encode_basestring_ascii as encode_string
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +31,11 @@ def _umask() -> int:
     return mask
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
+def atomic_write_bytes(path: Path, data: bytes, durable: bool = True) -> None:
     """Write ``data`` to ``path`` via a temporary file in the same folder and a rename, so that a
-    reader never sees a half-written file."""
+    reader never sees a half-written file. ``durable``: flushed to the disk before the rename
+    (fsync, a few ms); without it the file is as safe against a crash of the process, not
+    against one of the machine (the per-step rewrites of a run, :mod:`klaw_ocp.io.run_writer`)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
@@ -42,7 +43,8 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()
-            os.fsync(handle.fileno())
+            if durable:
+                os.fsync(handle.fileno())
         # mkstemp creates the file 0600; results get the user's normal mode (0644 under umask 022)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
@@ -52,12 +54,14 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
-def atomic_write_text(path: Path, text: str) -> None:
+def atomic_write_text(path: Path, text: str, durable: bool = True) -> None:
     """:func:`atomic_write_bytes` of UTF-8 text (newlines written as given)."""
-    atomic_write_bytes(path, text.encode("utf-8"))
+    atomic_write_bytes(path, text.encode("utf-8"), durable)
 
 
-def dynamics_csv(walk, table: dict | None = None) -> str:
+def dynamics_csv(walk, table: dict | None = None, header: bool = True) -> str:
+    """``dynamics.csv``: the header and one row per sample of ``table`` (default: the walk's);
+    without ``header`` only the rows, which a run appends step by step (the same bytes)."""
     if table is None:
         table = walk_table(walk) if walk.steps else {c: np.array([]) for c in COLUMNS}
     # whole columns to text first (indexing numpy cell by cell costs more than the walk), then
@@ -66,7 +70,8 @@ def dynamics_csv(walk, table: dict | None = None) -> str:
     columns = [table[c].tolist() if c == "subphase" else
                [str(int(v)) for v in table[c].tolist()] if c == "step" else list(map(repr, table[c].tolist()))
                for c in COLUMNS]
-    return "\n".join(map(",".join, [COLUMNS, *zip(*columns)])) + "\n"
+    lines = ([COLUMNS] if header else []) + list(zip(*columns))
+    return "\n".join(map(",".join, lines)) + "\n" if lines else ""
 
 
 def render_walk(walk, fps: float | None = None) -> dict:
@@ -81,6 +86,13 @@ def render_run(run) -> dict:
     """:func:`render_walk` of a :class:`~klaw_ocp.io.run_data.RunData` (its table, summary and,
     when it has them, the body's angles)."""
     files = _render(run.summary, dynamics_csv(None, run.table))
+    files.update(render_body(run))
+    return files
+
+
+def render_body(run) -> dict:
+    """The body's files of a run (angles.csv, walk.bvh, walk.mot), none without angles."""
+    files = {}
     if run.angles is not None and len(run.angles["time"]):
         from ..body import Body
         from .bvh import BVH_FILE, bvh_text
@@ -114,36 +126,24 @@ def events_csv(summary: dict) -> str:
     return buffer.getvalue()
 
 
-def summary_json(summary: dict) -> str:
-    """``json.dumps(summary, indent=2, allow_nan=False)``, byte for byte, in a third of its time
-    (with an indent, the json module encodes in pure Python, one generator per container): the
-    JSON types a summary holds, written out; anything else goes to the json module."""
-    def encode(value, pad: str) -> str:
-        if isinstance(value, str):
-            return encode_string(value)
-        if value is None or value is True or value is False:
-            return {None: "null", True: "true", False: "false"}[value]
-        if isinstance(value, int):
-            return int.__repr__(value)
-        if isinstance(value, float):
-            if not math.isfinite(value):
-                raise ValueError(f"Out of range float values are not JSON compliant: {value!r}")
-            return float.__repr__(value)
-        inner = pad + "  "
-        if isinstance(value, dict) and all(isinstance(k, str) for k in value):
-            items = (f"{inner}{encode_string(k)}: {encode(v, inner)}" for k, v in value.items())
-            return "{\n" + ",\n".join(items) + f"\n{pad}}}" if value else "{}"
-        if isinstance(value, (list, tuple)):
-            return "[\n" + ",\n".join(inner + encode(v, inner) for v in value) + f"\n{pad}]" if value else "[]"
-        raise TypeError
-    try:
-        return encode(summary, "")
-    except TypeError:
-        return json.dumps(summary, indent=2, allow_nan=False)
+#: stands for the steps in the summary's top level while :func:`summary_text` assembles it
+_STEPS_SLOT = "\x00steps\x00"
+
+
+def summary_text(summary: dict, step_texts: list[str] | None = None) -> str:
+    """``summary.json``: ``json.dumps(summary, indent=2)`` and a newline. With ``step_texts``
+    (each step's entry as ``json.dumps(entry)``, kept by a run as its steps come) the compact
+    ``json.dumps(summary)`` instead, assembled without serialising the steps again: the summary a
+    run rewrites after every step (:mod:`klaw_ocp.io.run_writer`; Python's JSON encoder is four
+    times slower with an indent)."""
+    if step_texts is None:
+        return json.dumps(summary, indent=2, allow_nan=False) + "\n"
+    text = json.dumps(dict(summary, steps=_STEPS_SLOT), allow_nan=False)
+    return text.replace(json.dumps(_STEPS_SLOT), "[" + ", ".join(step_texts) + "]", 1) + "\n"
 
 
 def _render(summary: dict, table_csv: str) -> dict:
-    text = summary_json(summary) + "\n"
+    text = summary_text(summary)
     return {"dynamics": ("dynamics.csv", table_csv.encode("utf-8")),
             "summary": ("summary.json", text.encode("utf-8")),
             "events": ("events.csv", events_csv(summary).encode("utf-8"))}

@@ -1,0 +1,111 @@
+"""What a walk does with the terminal: Ctrl-C waits for the end of the step, and CasADi's own
+warnings are kept for summary.json instead of being printed (issue #24).
+
+- :class:`DeferredInterrupt`: CasADi checks for Ctrl-C inside IPOPT and turns a KeyboardInterrupt
+  into a failed solve ("NonIpopt_Exception_Thrown", with a warning on stderr), so an interrupt
+  raised there is lost or reported as a solver failure. During a walk the first Ctrl-C only sets a
+  flag, which the walk checks between steps (:meth:`DeferredInterrupt.check`): the walk stops at
+  the end of the step it is solving (tens of milliseconds). A second Ctrl-C raises at once.
+  Only in the main thread, and only over Python's default handler (an application's own SIGINT
+  handler, or a worker that ignores SIGINT, is left alone).
+- :class:`CasadiMessages`: CasADi writes its warnings through Python's ``sys.stderr``
+  (``CasADi - <date> <time> WARNING("...") [file:line]``); while a walk runs, those lines are
+  taken out of the stream and kept (without the date, once each); every other line goes through.
+"""
+from __future__ import annotations
+
+import io
+import re
+import signal
+import sys
+import threading
+
+_PREFIX = "CasADi - "
+_STAMP = re.compile(r"^CasADi - \S+ \S+ ")
+#: at most this many distinct CasADi messages are kept per walk
+MAX_MESSAGES = 50
+
+
+class DeferredInterrupt:
+    """Context manager: Ctrl-C sets :attr:`pressed`; :meth:`check` raises KeyboardInterrupt then."""
+
+    def __init__(self):
+        self.pressed = 0
+        self._old = None
+
+    def __enter__(self) -> "DeferredInterrupt":
+        if (threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+            self._old = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def _handler(self, signum, frame) -> None:
+        self.pressed += 1
+        if self.pressed > 1:
+            raise KeyboardInterrupt
+
+    def check(self) -> None:
+        if self.pressed:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc) -> None:
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+            self._old = None
+
+
+class CasadiMessages(io.TextIOBase):
+    """Context manager that stands in for ``sys.stderr``: CasADi's lines go to :attr:`messages`."""
+
+    def __init__(self):
+        super().__init__()
+        self.messages: list[str] = []
+        self._target = None
+        self._partial = ""
+
+    def __enter__(self) -> "CasadiMessages":
+        self._target = sys.stderr
+        sys.stderr = self
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if sys.stderr is self:
+            sys.stderr = self._target
+        if self._partial:
+            self._line(self._partial, end="")
+            self._partial = ""
+
+    def writable(self) -> bool:
+        return True
+
+    @property
+    def encoding(self):
+        return getattr(self._target, "encoding", "utf-8")
+
+    def write(self, text: str) -> int:
+        self._partial += text
+        *lines, self._partial = self._partial.split("\n")
+        for line in lines:
+            self._line(line)
+        if self._partial and not (self._partial.startswith(_PREFIX) or _PREFIX.startswith(self._partial)):
+            self._target.write(self._partial)       # not CasADi's: through at once (a prompt, a bar)
+            self._partial = ""
+        return len(text)
+
+    def _line(self, line: str, end: str = "\n") -> None:
+        if line.startswith(_PREFIX):
+            message = _STAMP.sub("", line).strip()
+            if message not in self.messages and len(self.messages) < MAX_MESSAGES:
+                self.messages.append(message)
+        else:
+            self._target.write(line + end)
+
+    def flush(self) -> None:
+        if self._target is not None:
+            self._target.flush()
+
+    def fileno(self) -> int:
+        return self._target.fileno()
+
+    def isatty(self) -> bool:
+        return self._target.isatty()

@@ -1,0 +1,163 @@
+"""A run's result files written as its walk goes (``klaw-ocp run``; issue #24, "failure loses
+nothing").
+
+:class:`RunWriter` is handed to :func:`klaw_ocp.walk.simulate_walk` as its ``on_step``. After each
+completed step it
+
+- appends the step's rows to ``dynamics.csv`` (the file grows step by step; its bytes at the end
+  are those of :func:`klaw_ocp.io.writers.dynamics_csv` of the whole walk),
+- appends the new foot events to ``events.csv`` (rewritten instead, atomically, in the rare
+  case that an event of the new step falls before one already written),
+- rewrites ``summary.json`` atomically (``status: "running"``, every completed step): the full
+  summary, but as compact JSON, each step's entry serialised once, when it completes, and the
+  summary assembled from those texts (:func:`klaw_ocp.io.writers.summary_text`).
+
+These per-step writes skip the fsync of :func:`~klaw_ocp.io.writers.atomic_write_bytes` (they are
+safe against a crash of the process, and the next step rewrites them anyway); they cost about 1 ms
+a step beside the 15-20 ms of the natural walk's solve (docs/experiments.md). :meth:`RunWriter.finish`
+then writes the final ``summary.json`` (indented; ``status`` "ok", "failed" with its ``failure``,
+or "interrupted") and ``events.csv`` durably, and the files that need the whole walk: ``angles.csv``,
+``walk.bvh``, ``walk.mot`` (the last stance leg is completed by the next step's double support),
+the plots and ``walk.gif``. A crash between steps leaves the completed steps on disk with
+``status: "running"``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..results import COLUMNS, step_summary, step_table, summary_of
+from .writers import atomic_write_bytes, dynamics_csv, events_csv, render_body, summary_text, write_rendered
+
+DYNAMICS_FILE = "dynamics.csv"
+SUMMARY_FILE = "summary.json"
+EVENTS_FILE = "events.csv"
+RESOLVED_FILE = "config.resolved.yaml"
+PLOTS_DIR = "plots"
+GIF_FILE = "walk.gif"        # = klaw_ocp.io.animation.GIF_FILE (not imported here: it loads matplotlib)
+
+
+class RunWriter:
+    """Writes one run into ``folder``: ``config.resolved.yaml`` (``resolved_yaml``, if given) and
+    the header of ``dynamics.csv`` now, each completed step when called (:meth:`step`, the
+    ``on_step`` of :func:`~klaw_ocp.walk.simulate_walk`), everything else in :meth:`finish`.
+    ``fps``: the frames per second of the body's files."""
+
+    def __init__(self, folder, resolved_yaml: str | None = None, fps: float | None = None):
+        self.folder = Path(folder)
+        self.fps = fps
+        #: per written step: (table, summary entry, its JSON text, dynamics.csv's size after it)
+        self.done: list[tuple] = []
+        self.step_s = 0.0          # time spent writing the steps (the benchmark's "per-step writing")
+        self._events: list = []    # the foot events in events.csv
+        if resolved_yaml is not None:
+            atomic_write_bytes(self.folder / RESOLVED_FILE, resolved_yaml.encode("utf-8"))
+        header = dynamics_csv(None, {c: np.array([]) for c in COLUMNS}).encode("utf-8")
+        atomic_write_bytes(self.folder / DYNAMICS_FILE, header, durable=False)     # fsynced by finish
+        self._header_size = len(header)
+
+    # -- per step --------------------------------------------------------------------------------
+    def step(self, walk) -> None:
+        """Write every completed step of ``walk`` not written yet, then the summary so far."""
+        t0 = time.perf_counter()
+        self._catch_up(walk)
+        summary = self._summary(walk, status="running")
+        self._write_events(summary["events"])
+        text = summary_text(summary, [d[2] for d in self.done])
+        atomic_write_bytes(self.folder / SUMMARY_FILE, text.encode("utf-8"), durable=False)
+        self.step_s += time.perf_counter() - t0
+
+    def _write_events(self, events: list) -> None:
+        path, n = self.folder / EVENTS_FILE, len(self._events)
+        if n and events[:n] == self._events and path.is_file():
+            rows = events_csv({"events": events[n:]}).split("\n", 1)[1]       # without the header
+            with open(path, "a", encoding="utf-8", newline="") as handle:
+                handle.write(rows)
+        else:
+            atomic_write_bytes(path, events_csv({"events": events}).encode("utf-8"), durable=False)
+        self._events = events
+
+    def _catch_up(self, walk) -> None:
+        for step in walk.steps[len(self.done):]:
+            table = step_table(step, walk.spec.body)
+            entry = step_summary(walk.spec, step)
+            text = json.dumps(entry, allow_nan=False)
+            size = self._append(dynamics_csv(None, table, header=False).encode("utf-8"))
+            self.done.append((table, entry, text, size))     # one statement: the step is written
+
+    def _append(self, data: bytes) -> int:
+        """Append ``data`` after the rows written so far (an append an interrupt cut short is
+        overwritten); returns the file's size after it."""
+        start = self.done[-1][3] if self.done else self._header_size
+        fd = os.open(self.folder / DYNAMICS_FILE, os.O_WRONLY)
+        try:
+            os.lseek(fd, start, os.SEEK_SET)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.ftruncate(fd, start + len(data))
+        finally:
+            os.close(fd)
+        return start + len(data)
+
+    def _summary(self, walk, status: str | None = None) -> dict:
+        tables = [d[0] for d in self.done]
+        speed = None
+        if tables:
+            first, last = tables[0], tables[-1]
+            if last["t"][-1] > first["t"][0]:
+                speed = 3.6 * (last["hip_x"][-1] - first["hip_x"][0]) / (last["t"][-1] - first["t"][0])
+        summary = summary_of(walk, [d[1] for d in self.done], speed)
+        if status is not None:
+            summary["status"] = status
+        return summary
+
+    # -- at the end ------------------------------------------------------------------------------
+    def table(self) -> dict:
+        """The whole walk's table (:func:`klaw_ocp.results.walk_table`), from the steps written."""
+        if not self.done:
+            return {c: np.array([], dtype=str if c == "subphase" else float) for c in COLUMNS}
+        return {c: np.concatenate([d[0][c] for d in self.done]) for c in COLUMNS}
+
+    def finish(self, walk, plots: bool = False, animation: bool = False, body: bool = True):
+        """Write the rest of the run: any step not written yet, the final summary and events
+        (durably), with ``body`` angles.csv, walk.bvh and walk.mot, with ``plots`` the plots and
+        with ``animation`` walk.gif (for a walk with at least one step). Returns the paths by name
+        and the drawing times ``{"plots": s, "animation": s}`` (None for what was not drawn) and
+        the RunData of the walk."""
+        from .run_data import RunData
+        self._catch_up(walk)
+        path = self.folder / DYNAMICS_FILE
+        with open(path, "rb+") as handle:     # the rows of the written steps, durably
+            handle.truncate(self.done[-1][3] if self.done else self._header_size)
+            os.fsync(handle.fileno())
+        summary = self._summary(walk)
+        paths = {"dynamics": path, "summary": self.folder / SUMMARY_FILE, "events": self.folder / EVENTS_FILE}
+        atomic_write_bytes(paths["summary"], summary_text(summary).encode("utf-8"))
+        atomic_write_bytes(paths["events"], events_csv(summary).encode("utf-8"))
+        self._events = summary["events"]
+        if (self.folder / RESOLVED_FILE).exists():
+            paths["resolved"] = self.folder / RESOLVED_FILE
+        table = self.table()
+        run = RunData.from_walk(walk, table=table, summary=summary, fps=self.fps) if body else \
+            RunData(name=walk.spec.name, summary=summary, table=table)
+        if body:
+            paths.update(write_rendered(render_body(run), self.folder))
+        times = {"plots": None, "animation": None}
+        if plots and walk.steps:
+            t0 = time.perf_counter()
+            from .plots import render_plots
+            paths.update(write_rendered(render_plots(run), self.folder / PLOTS_DIR))
+            times["plots"] = time.perf_counter() - t0
+        if animation and walk.steps:
+            t0 = time.perf_counter()
+            from .animation import write_animation
+            gif = write_animation(run, self.folder / GIF_FILE)
+            if gif is not None:
+                paths["animation"] = gif
+                times["animation"] = time.perf_counter() - t0
+        return paths, times, run
