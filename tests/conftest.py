@@ -42,3 +42,14 @@ def short_config(tmp_path):
     path.write_text(yaml.safe_dump({"name": "short", "body": {"height": 1.8, "mass": 80},
                                     "walk": {"speed": 5.0, "steps": 2}}))
     return path
+
+
+@pytest.fixture
+def no_solving(monkeypatch):
+    """Any walk or solver built from here on fails the test."""
+    import klaw_ocp.walk
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("solved a walk")
+    monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", refuse)
+    monkeypatch.setattr(klaw_ocp.walk, "make_solver", refuse)

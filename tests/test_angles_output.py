@@ -16,17 +16,6 @@ COLUMNS = ["time", "root_x", "root_y", "root_z", *ANGLE_NAMES]
 BODY_PLOTS = {"joint_angles.png", "body.png"}
 
 
-@pytest.fixture
-def no_solving(monkeypatch):
-    """Any walk or solver built from here on fails the test."""
-    import klaw_ocp.walk
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("solved a walk")
-    monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", refuse)
-    monkeypatch.setattr(klaw_ocp.walk, "make_solver", refuse)
-
-
 def _header_and_rows(path):
     lines = path.read_text(encoding="utf-8").splitlines()
     return lines[0].split(","), np.array([[float(v) for v in line.split(",")] for line in lines[1:]])

@@ -155,13 +155,13 @@ def test_plot_redraws_the_gif_from_the_results_folder_without_solving(run_dir, t
 
 def test_the_gif_is_written_atomically(run_dir, tmp_path, monkeypatch):
     """A failure while writing leaves the previous walk.gif as it was and no temporary file."""
-    import klaw_ocp.io.animation as animation
+    import klaw_ocp.io.writers as writers                  # the GIF is renamed into place there (atomic_path)
     target = tmp_path / GIF_FILE
     target.write_bytes(b"the previous walk.gif")
 
     def broken_replace(src, dst):
         raise OSError("disk full")
-    monkeypatch.setattr(animation.os, "replace", broken_replace)
+    monkeypatch.setattr(writers.os, "replace", broken_replace)
     with pytest.raises(OSError, match="disk full"):
         write_animation(RunData.from_folder(run_dir), target)
     assert target.read_bytes() == b"the previous walk.gif"

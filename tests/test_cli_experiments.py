@@ -27,17 +27,6 @@ def _one_error_line(capsys) -> str:
     return lines[0]
 
 
-@pytest.fixture
-def no_solving(monkeypatch):
-    """Any walk or solver built from here on fails the test."""
-    import klaw_ocp.walk
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("solved a walk")
-    monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", refuse)
-    monkeypatch.setattr(klaw_ocp.walk, "make_solver", refuse)
-
-
 # ---------------------------------------------------------------------------------------- --set
 
 def test_set_overrides_fields_of_every_section(short_config, tmp_path):

@@ -11,17 +11,6 @@ from klaw_ocp.errors import ConvergenceError
 from klaw_ocp.io.results_folder import MARKER, inspect_folder, read_marker
 
 
-@pytest.fixture
-def no_solving(monkeypatch):
-    """Any walk or solver built from here on fails the test."""
-    import klaw_ocp.walk
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("solved a walk")
-    monkeypatch.setattr(klaw_ocp.walk, "simulate_walk", refuse)
-    monkeypatch.setattr(klaw_ocp.walk, "make_solver", refuse)
-
-
 def _snapshot(folder: Path) -> dict:
     """Every file under ``folder`` (relative path -> bytes)."""
     return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}

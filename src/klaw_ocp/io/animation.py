@@ -25,8 +25,6 @@ frame flickers) and written atomically (a temporary file in the same folder, the
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,7 +40,7 @@ from .gait_diagram import gait_events
 from .gif_pixels import FONT, MovingLabels, PaletteWriter, StaticText
 from .plot_style import LEG_COLOURS, add_axes_in, new_figure
 from .strobe import GROUND_COLOUR, TRUNK_COLOUR
-from .writers import _umask
+from .writers import atomic_path
 
 GIF_FILE = "walk.gif"
 #: frames per second of walk.gif; GIF stores frame durations in 1/100 s, so 1000 / GIF_FPS is a
@@ -372,21 +370,12 @@ def write_animation(run, path, fps: float = GIF_FPS) -> Path | None:
     if not has_animation_data(run):
         return None
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     animation = animation_figure(run, fps)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix or ".gif")
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=path.suffix or ".gif") as tmp:
         writer = PaletteWriter(fps=fps)
-        writer.setup(animation.fig, tmp, dpi=GIF_DPI)
+        writer.setup(animation.fig, str(tmp), dpi=GIF_DPI)
         for i in range(animation.frames):
             animation.frame(i)
             writer.add_frame(animation.pixels())
         writer.finish()
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

@@ -14,6 +14,7 @@ import io
 import json
 import os
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -31,27 +32,35 @@ def _umask() -> int:
     return mask
 
 
-def atomic_write_bytes(path: Path, data: bytes, durable: bool = True) -> None:
-    """Write ``data`` to ``path`` via a temporary file in the same folder and a rename, so that a
-    reader never sees a half-written file. ``durable``: flushed to the disk before the rename
-    (fsync, a few ms); without it the file is as safe against a crash of the process, not
-    against one of the machine (the per-step rewrites of a run, :mod:`klaw_ocp.io.run_writer`)."""
+@contextmanager
+def atomic_path(path: Path, suffix: str = ".tmp"):
+    """A temporary path in ``path``'s folder to write the file into; when the block ends, the file
+    gets the user's normal mode (mkstemp makes it 0600) and is renamed to ``path``, so that a reader
+    never sees a half-written file; if the block raises, the temporary is removed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-            handle.flush()
-            if durable:
-                os.fsync(handle.fileno())
-        # mkstemp creates the file 0600; results get the user's normal mode (0644 under umask 022)
+        yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def atomic_write_bytes(path: Path, data: bytes, durable: bool = True) -> None:
+    """Write ``data`` to ``path`` atomically (:func:`atomic_path`). ``durable``: flushed to the
+    disk before the rename (fsync, a few ms); without it the file is as safe against a crash of
+    the process, not against one of the machine (the per-step rewrites of a run,
+    :mod:`klaw_ocp.io.run_writer`)."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        if durable:
+            os.fsync(handle.fileno())
 
 
 def atomic_write_text(path: Path, text: str, durable: bool = True) -> None:
