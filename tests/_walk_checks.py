@@ -201,6 +201,27 @@ def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense,
     return toe, heel
 
 
+def swing_body_lift(recorded: RecordedWalk, step):
+    """times -> how far the body lifts the swing ankle above the dynamic leg's
+    (SwingFoot.lifted_foot), from the dense samples of swing1, swing2 and swing3."""
+    body, t, hip, ankle, shank = recorded.body, [], [], [], []
+    for name in ("swing1", "swing2", "swing3"):
+        dense = recorded.dense(step.index, name)
+        hips = world_hips(body, dense.x, step.origin_x)
+        theta3 = dense.x[:, 6]
+        theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
+        t.append(dense.t)
+        hip.append(hips)
+        ankle.append(hips - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+                     - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)]))
+        shank.append(theta3 + theta4)
+    t, hip, ankle, shank = np.concatenate(t), np.vstack(hip), np.vstack(ankle), np.concatenate(shank)
+    grid = step.swing_foot.guard_grid()
+    on_grid = lambda v: np.column_stack([np.interp(grid, t, c) for c in np.atleast_2d(v.T)])
+    _, _, lift = step.swing_foot.lifted_foot(body, grid, grid, on_grid(hip), on_grid(ankle), on_grid(shank)[:, 0])
+    return lambda times: np.interp(times, grid, lift)
+
+
 def swing_leg_function(recorded: RecordedWalk, step):
     """times -> (ankle height, shank angle) of a step's swing leg, linear between the dense samples
     of swing1, swing2 and swing3 (what the body's foot needs: SwingFoot.grounded_angles)."""

@@ -165,9 +165,10 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     """The swing foot's lowest toe tip and heel (m above the ground) at the swing's samples
     between toe-off and heel strike (both ends excluded: there the toe, then the heel, touch the
     ground by definition), and its lowest toe in swing2 (the mid-swing toe clearance that
-    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py), on the leg
-    interpolated linearly between the samples (``hips``: the step's :func:`walk_hips`, when the
-    caller has them)."""
+    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py: turned, and
+    lifted with the ankle where the dynamic leg is too low for a foot), on the leg interpolated
+    linearly between the samples (``hips``: the step's :func:`walk_hips`, when the caller has
+    them); ``ankle_lift_max_m`` is how far the body lifted the ankle above the dynamic leg's."""
     names = ("swing1", "swing2", "swing3")
     subs = [step.subphase(name) for name in names]
     t = np.concatenate([sub.t for sub in subs])
@@ -178,14 +179,18 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     else:
         hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
     shank = x[:, 6] + theta4
-    ankle_y = hips[:, 1] - body.l3 * np.cos(x[:, 6]) - body.l4 * np.cos(shank)
-    theta5, theta6 = step.swing_foot.grounded_angles(
-        body, t, lambda times: (np.interp(times, t, ankle_y), np.interp(times, t, shank)))
-    heel, toe = sole_heights(body, ankle_y, shank, theta5, theta6)
+    ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
+        - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+    grid = step.swing_foot.guard_grid()
+    on_grid = lambda v: np.interp(grid, t, v)
+    theta5, theta6, lift = step.swing_foot.lifted_foot(
+        body, t, grid, np.column_stack([on_grid(hips[:, 0]), on_grid(hips[:, 1])]),
+        np.column_stack([on_grid(ankle[:, 0]), on_grid(ankle[:, 1])]), on_grid(shank))
+    heel, toe = sole_heights(body, ankle[:, 1] + lift, shank, theta5, theta6)
     inside = (t > t[0]) & (t < t[-1])
     swing2 = (t >= subs[1].t[0]) & (t <= subs[1].t[-1])
     return {"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
-            "midswing_toe_min_m": float(toe[swing2].min())}
+            "midswing_toe_min_m": float(toe[swing2].min()), "ankle_lift_max_m": float(lift.max())}
 
 
 def foot_events(walk) -> list[dict]:

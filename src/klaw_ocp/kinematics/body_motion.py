@@ -32,6 +32,7 @@ from .walk_samples import frame_times, locate_steps, stance_at, stance_curves, s
 #: The columns of angles.csv: time (s), the root (pelvis centre, m), then the 56 angles (degrees).
 ANGLES_COLUMNS = ("time", "root_x", "root_y", "root_z") + ANGLE_NAMES
 _POINTS = ("hip", "knee", "ankle", "heel", "metatarsal", "toe")
+_FOOT = ("ankle", "heel", "metatarsal", "toe")
 _OTHER = {"right": "left", "left": "right"}
 _HIP_FLEXION = {side: ANGLE_NAMES.index(f"{s}_hip_flexion") for s, side in SIDES}
 
@@ -141,13 +142,19 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
     which = np.repeat(np.arange(len(feet)), [len(r) for r in rows])
     legs = stance_frames([foot for _, foot in feet], which, np.concatenate(t_leg),
                          np.vstack([hips[side][r] for side, r in zip(sides, rows)]))
+    # where the hip is beyond the leg's reach of its foot (long steps, late in the double support),
+    # the straight leg ends short of the foot's ankle: the foot hangs from it, its toe off the
+    # ground a little early, rather than a shank stretched to the planted foot (the skeleton's
+    # segments are rigid) and a leg that jumps to the swing's posture at toe-off
+    toward_hip = legs.hip - legs.ankle
+    pull = toward_hip * (legs.overreach / np.maximum(np.hypot(*toward_hip.T), 1e-12))[:, None]
     points = {side: {name: np.full((n, 2), np.nan) for name in _POINTS} for _, side in SIDES}
     covered = {side: np.zeros(n, bool) for _, side in SIDES}
     start = 0
     for (k, _), side, r in zip(feet, sides, rows):
         mine = slice(start, start + len(r))
         for name in _POINTS:
-            points[side][name][r] = getattr(legs, name)[mine]
+            points[side][name][r] = getattr(legs, name)[mine] + (pull[mine] if name in _FOOT else 0.0)
         covered[side][r] = True
         start += len(r)
     return points, covered
@@ -182,14 +189,17 @@ def swing_legs(walk, samples: Samples, rows: np.ndarray, simulated_hip: np.ndarr
     swinging = np.unique(step)
     grids = [steps[k].swing_foot.guard_grid() for k in swinging]
     grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
-    grid_shank, grid_ankle = planar_leg(grid_step, grid_t, stance_at(walk, stance, grid_step, grid_t)[0])
+    grid_hip = stance_at(walk, stance, grid_step, grid_t)[0]
+    grid_shank, grid_ankle = planar_leg(grid_step, grid_t, grid_hip)
     ends = np.cumsum([len(g) for g in grids])
-    theta5, theta6 = np.empty(len(rows)), np.empty(len(rows))
+    theta5, theta6, lift = np.empty(len(rows)), np.empty(len(rows)), np.empty(len(rows))
     for k, grid, end in zip(swinging, grids, ends):
         mine, on_grid = step == k, slice(end - len(grid), end)
-        theta5[mine], theta6[mine] = steps[k].swing_foot.grounded_angles_on_grid(
-            body, tau[mine], grid, grid_ankle[on_grid, 1], grid_shank[on_grid])
+        theta5[mine], theta6[mine], lift[mine] = steps[k].swing_foot.lifted_foot(
+            body, tau[mine], grid, grid_hip[on_grid], grid_ankle[on_grid], grid_shank[on_grid])
     heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
+    up = np.column_stack([np.zeros(len(rows)), lift])   # the foot carried up with the lifted ankle
+    ankle, heel, metatarsal, toe = ankle + up, heel + up, metatarsal + up, toe + up
     _, _, knee = leg_ik(body, hip, ankle)
     return {"hip": hip, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}
 

@@ -57,6 +57,23 @@ def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, 
     return theta3, theta4, knee
 
 
+def knee_flexion_for_reach(body: Body, d) -> np.ndarray:
+    """Knee flexion (rad, 0 straight) of the two-segment leg whose hip and ankle are ``d`` (m,
+    clipped to l1) apart: :func:`leg_ik`'s half-angle form, well conditioned at the straight knee."""
+    l3, l4 = body.l3, body.l4
+    d = np.minimum(np.asarray(d, float), l3 + l4)
+    s = (l3 + l4 + d) / 2
+    return 2 * np.arctan2(np.sqrt(np.maximum(s * (l3 + l4 - d) / 2, 0.0)),
+                          np.sqrt(np.maximum((s - l3) * (s - l4), 0.0)))
+
+
+def reach_for_knee_flexion(body: Body, flexion) -> np.ndarray:
+    """The hip-to-ankle distance (m) of the leg with knee flexion ``flexion`` (rad): the law of
+    cosines, the inverse of :func:`knee_flexion_for_reach`."""
+    l3, l4 = body.l3, body.l4
+    return np.sqrt(l3 * l3 + l4 * l4 + 2 * l3 * l4 * np.cos(flexion))
+
+
 def _readonly(values) -> np.ndarray:
     array = np.array(values, float)
     array.flags.writeable = False       # cached and shared: nobody may change it

@@ -35,6 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .leg_geometry import knee_flexion_for_reach, reach_for_knee_flexion
+
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
                    "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
@@ -151,6 +153,16 @@ class SwingFoot:
         n = max(int(math.ceil((self.t_heel_strike - self.t_toe_off) / GUARD_GRID)), 1) + 1
         return np.linspace(self.t_toe_off, self.t_heel_strike, n)
 
+    def lifted_foot(self, body, t, grid, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The foot the body shows at step-local times ``t`` (n,): θ5 and θ6 (rad,
+        :meth:`grounded_angles`) and the ankle's lift above the dynamic leg's (m,
+        :func:`ankle_lift`), given the dynamic leg at the times :meth:`guard_grid` ``grid``:
+        its hip and ankle (m, 2) and its shank angle θ3 + θ4 (m,)."""
+        n = len(grid)
+        theta5, theta6 = self.grounded_angles_on_grid(body, np.concatenate([grid, t]), grid, ankle[:, 1], shank)
+        lowest = lowest_sole_point(body, ankle[:, 1], shank, theta5[:n], theta6[:n])
+        return theta5[n:], theta6[n:], np.interp(t, grid, ankle_lift(body, grid, hip, ankle, lowest))
+
     def grounded_angles_on_grid(self, body, t, grid, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`grounded_angles` with the leg's ankle height and shank angle at the times
         :meth:`guard_grid` given (the body evaluates every step's grid in one pass)."""
@@ -158,7 +170,61 @@ class SwingFoot:
         theta5, theta6 = self.angles(np.concatenate([grid, t]))     # the grid's and t's in one call
         scheduled, n = theta5[:len(grid)], len(grid)
         required = _ground_clip(body, scheduled, theta6[:n], ankle_y, shank)[0] - scheduled
-        return theta5[n:] + np.interp(t, grid, rate_limited_turn(grid, required)), theta6[n:]
+        # the rate-limited turn lags where a large requirement falls off quickly (the schedule
+        # itself moving towards the level sole), and so can overshoot into the other limit: the
+        # toe then goes down where the heel needed the turn; clipped to both limits again
+        turn = rate_limited_turn(grid, required)
+        back = _ground_clip(body, scheduled + turn, theta6[:n], ankle_y, shank)[0] - scheduled - turn
+        turn = turn + _cone_envelope(grid, back, GUARD_RATE)
+        return theta5[n:] + np.interp(t, grid, turn), theta6[n:]
+
+
+def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
+    """Height (m) of the lowest of the heel, the first metatarsal head and the toe tip of the foot
+    of :func:`sole_heights` (the metatarsal head is the lowest where the toes are bent up)."""
+    heel, toe = sole_heights(body, ankle_y, shank_angle, theta5, theta6)
+    alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5
+    metatarsal = ankle_y - math.sqrt(body.l12 ** 2 - body.l9 ** 2) * np.sin(alpha) + body.l9 * np.cos(alpha)
+    return np.minimum(np.minimum(heel, toe), metatarsal)
+
+
+def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowest: np.ndarray) -> np.ndarray:
+    """How far (m) the body lifts the swing ankle above the dynamic leg's at the times ``grid``
+    (a step's :meth:`SwingFoot.guard_grid`), given the dynamic leg's hip and ankle (n, 2) and its
+    foot's lowest point there (:func:`lowest_sole_point`, with the grounded angles).
+
+    The second stage of the ground guard. Where the dynamic leg carries the ankle lower than any
+    foot fits (the straight knee of swing2's end and swing3 with the hip low: first steps from
+    rest, closing steps, slow steps; docs/body.md), turning the foot cannot keep it out of the
+    ground; the body then bends its knee, with the hip and the ankle's x kept, by the least angle
+    that lifts the lowest point of the foot onto the ground, the bend changing by at most
+    GUARD_RATE and 0 at toe-off and heel strike (:func:`rate_limited_turn`). The foot is carried
+    up with the ankle, unturned. Where the foot clears the ground the lift is 0 and the body's
+    leg is the dynamic one."""
+    need = np.maximum(-lowest, 0.0)
+    if not need.any():
+        return np.zeros(len(grid))
+    dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
+    flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
+    wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
+    bend = rate_limited_turn(grid, np.where(need > 0, np.maximum(wanted, 0.0), 0.0))
+    reach = reach_for_knee_flexion(body, flexion + bend)
+    return np.where(bend > 0, drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0)
+
+
+def _cone_envelope(grid: np.ndarray, required: np.ndarray, rate: float) -> np.ndarray:
+    """The least function at least ``required`` where that is positive and at most it where
+    negative that changes by at most ``rate``: max_j(part_j - rate |t_i - t_j|) for each sign's
+    part, as the larger of the running maxima from the left and from the right (O(n))."""
+    out = np.zeros(len(grid))
+    slope = rate * (grid - grid[0])
+    for sign in (1.0, -1.0):
+        part = np.maximum(sign * required, 0.0)
+        if part.any():
+            left = np.maximum.accumulate(part + slope) - slope
+            right = np.maximum.accumulate((part - slope)[::-1])[::-1] + slope
+            out += sign * np.maximum(left, right)
+    return out
 
 
 def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:

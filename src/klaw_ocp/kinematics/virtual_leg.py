@@ -237,7 +237,7 @@ class StanceFoot:
         to ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
         start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start,
-                       pitch_toe_off=max(pitch_toe_off, start))
+                       pitch_toe_off=max(pitch_toe_off, start), push_ease=max(self.push_ease, PUSH_EASE))
 
 
 #: The rules of :meth:`StanceFoot.pitch` that differ from stance to stance (:func:`rule_pitch`
@@ -349,11 +349,14 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     return hi
 
 
-#: A foot that stood still starts its push-off from rest over this fraction of the double support.
-#: Its leg may stand straight (a start from rest), and a heel rising at once would then bend the
-#: knee as the square root of time (3.6° in the first 2 ms). It is below 1 - TOE_OFF_RATE_WINDOW
-#: (control/step.py) so that the toe-off posture and rate that start swing1 stay as they were.
-PUSH_EASE_FROM_REST = 0.5
+#: Every foot's push-off eases in from rest over this fraction of the double support. The leg
+#: may be straight when the double support begins (single support lets the knee straighten; a
+#: start from rest), and a heel rising at once would then bend the knee as the square root of
+#: time: 3.6° in the first 2 ms from rest, 15° in steps of 0.6 m at 167 steps/min, whose double
+#: support lasts 17 ms. It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the toe-off
+#: posture and rate that start swing1 stay as they were.
+PUSH_EASE = 0.5
+PUSH_EASE_FROM_REST = PUSH_EASE
 
 
 def hind_foot_at_rest(body: Body, attrs, ankle_x: float) -> StanceFoot:

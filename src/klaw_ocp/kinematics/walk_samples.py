@@ -36,12 +36,13 @@ def _positive_interval(t_nodes: np.ndarray, t: np.ndarray) -> np.ndarray:
     return intervals[np.clip(k, 0, len(intervals) - 1)]
 
 
-def hermite(t_nodes, values, rates, t) -> np.ndarray:
+def hermite(t_nodes, values, rates, t, interval=None) -> np.ndarray:
     """Cubic Hermite interpolation of ``values`` with derivatives ``rates`` (both (m,) or (m, c),
-    at the nodes ``t_nodes`` (m,), non-decreasing) at the times ``t`` (n,): (n,) or (n, c)."""
+    at the nodes ``t_nodes`` (m,), non-decreasing) at the times ``t`` (n,): (n,) or (n, c).
+    ``interval`` (n,), if given, names the node that starts each sample's interval."""
     t_nodes, t = np.asarray(t_nodes, float), np.asarray(t, float)
     values, rates = np.asarray(values, float), np.asarray(rates, float)
-    i = _positive_interval(t_nodes, t)
+    i = _positive_interval(t_nodes, t) if interval is None else interval
     h = t_nodes[i + 1] - t_nodes[i]
     s = (t - t_nodes[i]) / h
     if values.ndim == 2:
@@ -81,19 +82,33 @@ class StepCurves:
     u: np.ndarray        # (m,) node step coordinates
     values: np.ndarray   # (m, c)
     rates: np.ndarray    # (m, c), per unit of u
+    first: np.ndarray    # (steps,) the node starting each step's first interval of positive length
+    last: np.ndarray     # (steps,) ... and its last one
 
     @classmethod
     def of(cls, t_step, pieces) -> "StepCurves":
         """``pieces``: (step index, node times τ (m,), values (m, c), rates (m, c) per second), in
         walk order."""
         t_step = np.asarray(t_step, float)
-        u = [k + np.asarray(tau, float) / t_step[k] for k, tau, _, _ in pieces]
+        u = np.concatenate([k + np.asarray(tau, float) / t_step[k] for k, tau, _, _ in pieces])
         rates = [np.asarray(r, float) * t_step[k] for k, _, _, r in pieces]
-        return cls(t_step, np.concatenate(u), np.vstack([v for _, _, v, _ in pieces]), np.vstack(rates))
+        node_step = np.repeat([k for k, *_ in pieces], [len(tau) for _, tau, _, _ in pieces])
+        own = np.flatnonzero((np.diff(u) > 0) & (node_step[1:] == node_step[:-1]))
+        first, last = np.zeros(len(t_step), int), np.zeros(len(t_step), int)
+        first[node_step[own][::-1]] = own[::-1]       # of repeated indices the last assignment wins
+        last[node_step[own]] = own
+        return cls(t_step, u, np.vstack([v for _, _, v, _ in pieces]), np.vstack(rates), first, last)
 
     def __call__(self, step: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c)."""
-        return hermite(self.u, self.values, self.rates, step + tau / self.t_step[step])
+        """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c).
+
+        Each sample is interpolated on its own step's nodes: at a heel strike's instant u = k + 1
+        is also the next step's first node, and a sample of step k a round-off before it (τ one
+        ulp short of t_step) can round to that u, where the next step's curve (another stance
+        origin, the other leg) would be taken."""
+        u = step + tau / self.t_step[step]
+        interval = np.clip(_positive_interval(self.u, u), self.first[step], self.last[step])
+        return hermite(self.u, self.values, self.rates, u, interval)
 
 
 def stance_curves(walk) -> StepCurves:
