@@ -18,11 +18,13 @@ from klaw_ocp.dynamics.kinematics import foot_points_arrays, foot_points_float
 from klaw_ocp.gait import LocomotionAttributes
 from klaw_ocp.io.run_data import RunData
 from klaw_ocp.io.writers import angles_csv
-from klaw_ocp.kinematics.body_motion import ANGLES_COLUMNS, body_motion
+from klaw_ocp.kinematics.body_motion import ANGLES_COLUMNS, body_motion, swing_hips, toe_off_ankles
+from klaw_ocp.kinematics.leg_geometry import leg_ik
 from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, forward_kinematics
 from klaw_ocp.kinematics.stance_legs import stance_frames
+from klaw_ocp.kinematics.swing_legs import TOE_OFF_BLEND, swing_legs
 from klaw_ocp.kinematics.virtual_leg import hind_foot_at_rest
-from klaw_ocp.kinematics.walk_samples import frame_times, hermite, spline_rates
+from klaw_ocp.kinematics.walk_samples import frame_times, hermite, spline_rates, swing_curves
 from klaw_ocp.results import stance_leg
 from klaw_ocp.walk import simulate_walk, walk_spec
 
@@ -305,3 +307,23 @@ def test_a_foot_that_stood_still_starts_its_push_off_from_rest():
     pitch = foot.pitch(np.array([0.0, 1e-3, 0.15, 0.2]), hips)
     assert pitch[0] == 0.0 and pitch[1] < 1e-4 and pitch[3] == pytest.approx(0.6)
     assert pitch[2] == pytest.approx(0.6 * 0.15 / 0.2)              # the line itself once eased in
+
+
+def test_the_body_swing_knee_is_the_dynamic_knee_after_the_toe_off_blend(short_walk):
+    """kinematics/swing_legs.py: the swing leg hangs from its own hip in its plane with the
+    dynamics' hip-to-ankle distance, so its knee is the dynamic θ4 once the blend out of the
+    virtual leg's toe-off posture is over (no lift in this walk: the turned foot clears); before
+    that it starts from the virtual leg's toe-off ankle."""
+    walk, body = short_walk, short_walk.spec.body
+    hips_at = swing_hips(walk, lambda t: np.zeros((len(t), 3)))
+    start = toe_off_ankles(walk, hips_at)
+    for k, step in enumerate(walk.steps):
+        foot = step.swing_foot
+        after = foot.t_toe_off + TOE_OFF_BLEND * (foot.t1 - foot.t_toe_off)
+        tau = np.r_[foot.t_toe_off, np.linspace(after, foot.t_heel_strike, 50)]
+        steps = np.full(len(tau), k)
+        leg = swing_legs(walk, steps, tau, hips_at, start)
+        _, knee, _ = leg_ik(body, leg["hip"], leg["ankle"])
+        # 1e-7: at the straight knee of swing3 a round-off of the distance is 1e-8 rad of knee
+        assert knee[1:] == pytest.approx(swing_curves(walk)(steps[1:], tau[1:])[:, 1], abs=1e-7), k
+        assert leg["ankle"][0] == pytest.approx(start[k], abs=1e-12), k

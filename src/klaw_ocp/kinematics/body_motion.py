@@ -20,14 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.kinematics import foot_points_arrays
 from ..results import stance_leg
-from .leg_geometry import leg_ik
 from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
 from .skeleton import ANGLE_NAMES, SIDES
 from .stance_legs import stance_frames
+from .swing_legs import swing_legs
 from .upper_body import StepWindow, lateral_displacement, upper_body_motion
-from .walk_samples import frame_times, locate_steps, stance_at, stance_curves, swing_curves
+from .walk_samples import frame_times, locate_steps, stance_at, stance_curves
 
 #: The columns of angles.csv: time (s), the root (pelvis centre, m), then the 56 angles (degrees).
 ANGLES_COLUMNS = ("time", "root_x", "root_y", "root_z") + ANGLE_NAMES
@@ -142,12 +141,7 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
     which = np.repeat(np.arange(len(feet)), [len(r) for r in rows])
     legs = stance_frames([foot for _, foot in feet], which, np.concatenate(t_leg),
                          np.vstack([hips[side][r] for side, r in zip(sides, rows)]))
-    # where the hip is beyond the leg's reach of its foot (long steps, late in the double support),
-    # the straight leg ends short of the foot's ankle: the foot hangs from it, its toe off the
-    # ground a little early, rather than a shank stretched to the planted foot (the skeleton's
-    # segments are rigid) and a leg that jumps to the swing's posture at toe-off
-    toward_hip = legs.hip - legs.ankle
-    pull = toward_hip * (legs.overreach / np.maximum(np.hypot(*toward_hip.T), 1e-12))[:, None]
+    pull = _overreach_pull(legs)
     points = {side: {name: np.full((n, 2), np.nan) for name in _POINTS} for _, side in SIDES}
     covered = {side: np.zeros(n, bool) for _, side in SIDES}
     start = 0
@@ -160,48 +154,39 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
     return points, covered
 
 
-def swing_legs(walk, samples: Samples, rows: np.ndarray, simulated_hip: np.ndarray, hip: np.ndarray) -> dict:
-    """The swing leg in its plane at ``rows`` of the samples (all after their step's toe-off).
+def _overreach_pull(legs) -> np.ndarray:
+    """(n, 2): where the hip is beyond the leg's reach of its foot (long steps, late in the double
+    support), the straight leg ends short of the foot's ankle: the foot hangs from it, its toe off
+    the ground a little early, rather than a shank stretched to the planted foot (the skeleton's
+    segments are rigid) and a leg that jumps to the swing's posture at toe-off. The foot's points
+    move by this."""
+    toward_hip = legs.hip - legs.ankle
+    return toward_hip * (legs.overreach / np.maximum(np.hypot(*toward_hip.T), 1e-12))[:, None]
 
-    The planar model's swing leg, the dynamics' θ3, θ4 hanging from the simulated hip
-    ``simulated_hip`` (len(rows), 2), places the ankle, and the swing foot (§4.3, its grounded
-    angles: :meth:`.swing_foot.SwingFoot.grounded_angles`) on it; ankle and foot keep their heights
-    above the ground in the leg's own plane, so the foot clears the ground exactly as in the model.
-    Thigh and shank reach that ankle from the leg's own hip ``hip`` (in-plane, len(rows), 2) by
-    two-link inverse kinematics (knee forward). While the feet are closer together than the hips,
-    the swing leg's plane puts its hip at most a few millimetres lower than the simulated one (its
-    foot line is nearer under the hip than the stance leg's), so the leg always reaches; at heel
-    strike, with no lateral displacement, the two coincide, and at toe-off the leg continues the
-    virtual leg's posture (the same hip, the same ankle and foot)."""
-    body, steps = walk.spec.body, walk.steps
-    step, tau = samples.step[rows], samples.tau[rows]
-    swing, stance = swing_curves(walk), stance_curves(walk)
 
-    def planar_leg(step, times, hip):
-        """The planar model's swing leg of steps ``step`` at their times: shank angle and ankle (m)."""
-        theta3, theta4 = swing(step, times).T
-        shank = theta3 + theta4
-        knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
-        return shank, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
-    shank, ankle = planar_leg(step, tau, simulated_hip)
-    # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
-    # one pass (a pass per step costs mostly numpy's fixed overheads)
-    swinging = np.unique(step)
-    grids = [steps[k].swing_foot.guard_grid() for k in swinging]
-    grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
-    grid_hip = stance_at(walk, stance, grid_step, grid_t)[0]
-    grid_shank, grid_ankle = planar_leg(grid_step, grid_t, grid_hip)
-    ends = np.cumsum([len(g) for g in grids])
-    theta5, theta6, lift = np.empty(len(rows)), np.empty(len(rows)), np.empty(len(rows))
-    for k, grid, end in zip(swinging, grids, ends):
-        mine, on_grid = step == k, slice(end - len(grid), end)
-        theta5[mine], theta6[mine], lift[mine] = steps[k].swing_foot.lifted_foot(
-            body, tau[mine], grid, grid_hip[on_grid], grid_ankle[on_grid], grid_shank[on_grid])
-    heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
-    up = np.column_stack([np.zeros(len(rows)), lift])   # the foot carried up with the lifted ankle
-    ankle, heel, metatarsal, toe = ankle + up, heel + up, metatarsal + up, toe + up
-    _, _, knee = leg_ik(body, hip, ankle)
-    return {"hip": hip, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}
+def toe_off_ankles(walk, hips_at) -> np.ndarray:
+    """(steps, 2): each step's hind leg's ankle at its toe-off as the body shows it, its virtual
+    leg on the leg's own hip in its plane (the swing leg of the step starts from it)."""
+    feet = [s.hind_foot for s in walk.steps]
+    every = np.arange(len(feet))
+    _, own = hips_at(every, np.array([s.plan.timings.t_ds for s in walk.steps]))
+    legs = stance_frames(feet, every, np.array([f.t_toe_off for f in feet]), own)
+    return legs.ankle + _overreach_pull(legs)
+
+
+def swing_hips(walk, pelvis_at):
+    """``hips_at(step, tau)`` for :func:`.swing_legs.swing_legs`: the simulated hip and the swinging
+    leg's own hip in its plane, (n, 2) each, at samples of steps ``step`` and times ``tau``, with
+    the pelvis angles ``pelvis_at(t)`` (n, 3) at walk times t."""
+    starts = np.array([s.t_start for s in walk.steps])
+    swinging_left = np.array([stance_leg(k) == "right" for k in range(len(walk.steps))])
+
+    def hips_at(step, tau):
+        samples = Samples(starts[step] + tau, step, tau)
+        planes, _, _, simulated = leg_planes(walk, samples, pelvis_at(samples.t))
+        own = np.where(swinging_left[step][:, None], planes.hip_in_plane("left"), planes.hip_in_plane("right"))
+        return simulated, own
+    return hips_at
 
 
 def _stance_times(foot, tau: np.ndarray) -> np.ndarray:
@@ -219,15 +204,16 @@ def body_motion(walk, fps: float) -> BodyMotion:
     body, attrs = walk.spec.body, walk.spec.attributes
     samples = Samples.of(walk, fps)
     # level and square for now: the pelvis's determinants (rotation, list) will set these
-    pelvis_angles = np.zeros((len(samples.t), 3))
-    planes, centre, lean, simulated_hip = leg_planes(walk, samples, pelvis_angles)
+    pelvis_at = lambda t: np.zeros((len(t), 3))
+    pelvis_angles = pelvis_at(samples.t)
+    planes, centre, lean, _ = leg_planes(walk, samples, pelvis_angles)
     hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
     in_plane, on_ground = ground_legs(walk, samples, hips)
     # at any instant at most one leg swings: both legs' swings in one pass
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
-    swung = swing_legs(walk, samples, rows, simulated_hip[rows],
-                       np.vstack([hips[side][r] for side, r in swinging.items()]))
+    hips_at = swing_hips(walk, pelvis_at)
+    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_ankles(walk, hips_at))
     frames, start, legs = slice(None), 0, {}
     for side, r in swinging.items():
         for name in _POINTS:
