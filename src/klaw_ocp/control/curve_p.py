@@ -48,11 +48,19 @@ def root(f, a: float, b: float, xtol: float) -> float:
 def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -> tuple[np.ndarray, float]:
     """Ankle position and shank angle with the toe tip directly under the knee (end of swing1)."""
     kx, ky = float(knee[0]), float(knee[1])
-    dims = (body.l8, body.l9, body.l12, body.l13)
+    l4, l9, l13 = body.l4, body.l9, body.l13
+    # the toe's x of foot_points_float, operation for operation (the same root to the last bit),
+    # with what does not depend on phi taken out of the search's thousands of evaluations a walk
+    c5, s5 = math.cos(theta5), math.sin(theta5)
+    c6, s6 = math.cos(theta6), math.sin(theta6)
+    reach = math.sqrt(body.l12 ** 2 - l9 ** 2)
 
     def toe_ahead(phi):
-        ankle = kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)
-        return foot_points_float(*ankle, phi, theta5, theta6, *dims)[2][0] - kx
+        ux, uy = math.sin(phi), math.cos(phi)
+        fx, fy = -(c5 * ux - s5 * uy), -(s5 * ux + c5 * uy)   # u_f = -u_b
+        nx = -fy
+        toe_x = kx - l4 * ux + reach * fx - l9 * nx + l13 * (c6 * fx - s6 * fy)
+        return toe_x - kx
     phi = root(toe_ahead, -0.5, math.pi / 2, xtol=1e-13)
     return np.array([kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)]), phi
 

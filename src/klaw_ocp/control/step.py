@@ -15,6 +15,7 @@ import numpy as np
 
 from ..body import Body
 from ..dynamics import knee_lock_map, stance_hips
+from ..dynamics.evaluate import evaluate
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from ..solvers.problem import mapped
@@ -273,7 +274,7 @@ class StepController:
         x_end1 = s1.final_state
         mode2 = lock_mode(s1.events, mode=mode1)
         c2 = lock_context(c, mode2)
-        th4d = float(np.asarray(specs["swing1"].rhs(x_end1, t1, [s1.parameters["F_theta3_magnitude"]], c2)).ravel()[7])
+        th4d = float(evaluate(specs["swing1"].rhs, x_end1, t1, s1.parameters["F_theta3_magnitude"], c2)[0][7])
         guess2 = self._guess("swing2", 2)
         guess2[1] = 0.0
         s2 = self._solve(index, SubphaseProblem(
@@ -289,8 +290,9 @@ class StepController:
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), lock_context(c, mode3), self._guess("swing3", 1),
             self.scales["swing3"], mode=mode3))
         nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
-        heel = np.asarray(mapped(specs["swing3"].path, nodes)(
-            s3.states[:-1].T, s3.t[:-1], [s3.parameters["F_theta3_moment"]], c))[0]
+        path = specs["swing3"].path
+        heel = evaluate(mapped(path, nodes), s3.states[:-1], s3.t[:-1], s3.parameters["F_theta3_moment"],
+                        c)[0].reshape(nodes, path.size1_out(0))[:, 0]
         notes = lock_rule_notes(stance, b.l1)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, s1, s2, s3],

@@ -58,7 +58,8 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError, out_of_range
-from ._checks import as_vector, check_body, choice, to_numpy
+from ._checks import as_vector, check_body, choice
+from .evaluate import evaluate
 from .parameters import N_BODY_PARAMETERS
 from .stance import stance_mass_bias
 from .swing import swing_mass_bias
@@ -140,7 +141,7 @@ def heel_strike_map(body, x_pre, new_ankle_offset) -> np.ndarray:
     offset = as_vector("new_ankle_offset", new_ankle_offset, 2)
     if x[0] <= 0:
         raise ConfigError(out_of_range("x_pre[0] (w)", x[0], "a positive leg length in m"))
-    post = to_numpy(impact_functions()["heel_strike"](x, offset))
+    post, = evaluate(impact_functions()["heel_strike"], x, offset)
     if not post[0] > 0:
         # the hip coincides with the new ankle: theta1' is undefined
         raise ConfigError(out_of_range("new_ankle_offset", offset.tolist(), "a point other than the hip"))
@@ -185,7 +186,7 @@ def stance_lock_map(body, x, rule: str = "momentum") -> np.ndarray:
     x = as_vector("x", x, 6)
     if choice("rule", rule, LOCK_RULES) == "zero":
         return np.concatenate([x[:3], [0.0], x[4:]])
-    return to_numpy(impact_functions()["stance_lock"](x, body.dynamic_parameters()))
+    return evaluate(impact_functions()["stance_lock"], x, body.dynamic_parameters())[0]
 
 
 def knee_lock_map(body, x, hip_vel, rule: str = "momentum") -> np.ndarray:
@@ -199,4 +200,4 @@ def knee_lock_map(body, x, hip_vel, rule: str = "momentum") -> np.ndarray:
     as_vector("hip_vel", hip_vel, 2)
     if choice("rule", rule, LOCK_RULES) == "zero":
         return np.concatenate([x[:3], [0.0]])
-    return to_numpy(impact_functions()["knee_lock"](x, body.dynamic_parameters()))
+    return evaluate(impact_functions()["knee_lock"], x, body.dynamic_parameters())[0]

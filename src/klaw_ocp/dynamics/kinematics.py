@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from ._checks import as_scalar, as_vector, check_body, to_numpy
+from .evaluate import evaluate
 from .stance import stance_functions
 from .swing import swing_functions
 
@@ -124,8 +125,8 @@ def stance_hip(body, x_stance, ankle):
     check_body(body)
     x = as_vector("x_stance", x_stance, 6)
     ankle = as_vector("ankle", ankle, 2)
-    pos, vel, _ = stance_functions()["hip"](x[:3], x[3:], np.zeros(3))
-    return ankle + to_numpy(pos), to_numpy(vel)
+    pos, vel, _ = evaluate(stance_functions()["hip"], x[:3], x[3:], np.zeros(3))
+    return ankle + pos, vel
 
 
 def stance_hips(body, states, ankle) -> tuple[np.ndarray, np.ndarray]:
@@ -133,8 +134,9 @@ def stance_hips(body, states, ankle) -> tuple[np.ndarray, np.ndarray]:
     velocities, each ``(n, 2)``."""
     check_body(body)
     states = np.atleast_2d(np.asarray(states, float))[:, :6]
-    pos, vel, _ = _hip_map(len(states))(states[:, :3].T, states[:, 3:].T, np.zeros((3, 1)))
-    return np.asarray(ankle, float) + np.asarray(pos).T, np.asarray(vel).T
+    n = len(states)   # (n, 3) blocks in C order are CasADi's (3, n) columns
+    pos, vel, _ = evaluate(_hip_map(n), states[:, :3], states[:, 3:], np.zeros(3))
+    return np.asarray(ankle, float) + pos.reshape(n, 2), vel.reshape(n, 2)
 
 
 @lru_cache(maxsize=None)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import tempfile
 from contextlib import contextmanager
@@ -146,9 +147,66 @@ def summary_text(summary: dict, step_texts: list[str] | None = None) -> str:
     run rewrites after every step (:mod:`klaw_ocp.io.run_writer`; Python's JSON encoder is four
     times slower with an indent)."""
     if step_texts is None:
-        return json.dumps(summary, indent=2, allow_nan=False) + "\n"
+        try:
+            return _indented(summary, "\n") + "\n"
+        except _NotPlainJson:   # another type, a non-finite number: the json module's verdict
+            return json.dumps(summary, indent=2, allow_nan=False) + "\n"
     text = json.dumps(dict(summary, steps=_STEPS_SLOT), allow_nan=False)
     return text.replace(json.dumps(_STEPS_SLOT), "[" + ", ".join(step_texts) + "]", 1) + "\n"
+
+
+class _NotPlainJson(Exception):
+    """A value :func:`_indented` leaves to the json module."""
+
+
+_encode_str = json.encoder.encode_basestring_ascii
+
+
+def _float_text(value: float) -> str:
+    if not math.isfinite(value):
+        raise _NotPlainJson
+    return float.__repr__(value)
+
+
+#: the text of a scalar of exactly these types (subclasses take the isinstance tests)
+_SCALARS = {str: _encode_str, float: _float_text, int: int.__repr__, bool: lambda v: "true" if v else "false",
+            type(None): lambda v: "null"}
+
+
+def _indented(value, newline: str) -> str:
+    """``json.dumps(value, indent=2)``, character for character, for dicts with string keys,
+    lists, tuples, strings, numbers, booleans and None (anything else raises _NotPlainJson).
+    Python's json module has no C encoder for indented output; its pure-Python one took 6 ms
+    of the natural walk's 120 KB summary, this one 60 % of that (a type lookup per value, one
+    join per container). ``newline``: a newline and the indent of ``value``'s own level."""
+    scalar = _SCALARS.get(type(value))
+    if scalar is not None:
+        return scalar(value)
+    inner = newline + "  "
+    if isinstance(value, dict):
+        if not value:
+            return "{}"
+        parts = []
+        for key, item in value.items():
+            if type(key) is not str:
+                raise _NotPlainJson
+            scalar = _SCALARS.get(type(item))
+            parts.append(_encode_str(key) + ": " + (scalar(item) if scalar is not None else _indented(item, inner)))
+        return "{" + inner + ("," + inner).join(parts) + newline + "}"
+    if isinstance(value, (list, tuple)):
+        if not value:
+            return "[]"
+        parts = [_indented(item, inner) for item in value]
+        return "[" + inner + ("," + inner).join(parts) + newline + "]"
+    if isinstance(value, str):
+        return _encode_str(value)
+    if isinstance(value, bool):   # before int: json writes True as true, not 1
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return int.__repr__(value)
+    if isinstance(value, float):
+        return _float_text(value)
+    raise _NotPlainJson
 
 
 def _render(summary: dict, table_csv: str) -> dict:

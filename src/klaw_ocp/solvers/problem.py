@@ -16,7 +16,7 @@ solve comes back with ``success = False`` and a message, it does not raise midwa
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import Callable, Optional, Sequence
 
@@ -62,6 +62,20 @@ class SubphaseSpec:
     #: (x, c) -> margins, all >= 0 on a physically meaningful state: a trajectory that leaves them
     #: is not a solution, whatever its residual (Newton can converge to a leg metres long)
     plausible: Optional[ca.Function] = None
+
+    def __hash__(self) -> int:
+        # the dataclass's hash of every field, computed once: the solvers look their kernels and
+        # Newton state up by spec about 300 times a walk, and each CasADi Function's hash crosses
+        # SWIG (22 us a spec)
+        cached = self.__dict__.get("_hash")
+        if cached is None:
+            cached = hash(tuple(getattr(self, f.name) for f in fields(self) if f.compare))
+            object.__setattr__(self, "_hash", cached)
+        return cached
+
+    def __getstate__(self) -> dict:
+        # a Function's hash is its address: another process computes its own
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
 
     @property
     def nx(self) -> int:
