@@ -33,7 +33,8 @@ FPS = 500.0
 PLANTED_M = 1e-3
 MAX_FRAME_STEP_DEG = 2.0
 WALKS = [("natural_walk", "multiple-shooting"), ("natural_walk", "plain-shooting"),
-         ("start_stop_5kmh", "multiple-shooting"), ("start_stop_5kmh", "plain-shooting")]
+         ("start_stop_5kmh", "multiple-shooting"), ("start_stop_5kmh", "plain-shooting"),
+         ("start_stop_2kmh", "multiple-shooting")]
 
 
 @pytest.fixture(scope="module", params=WALKS, ids=["-".join(w) for w in WALKS])
@@ -140,13 +141,13 @@ def test_the_root_is_the_pelvis_centre_and_the_angles_rebuild_the_legs(walked):
 def test_the_root_follows_the_simulated_hip(walked):
     """Level pelvis: the root is the simulated hip, x for x, and as high as the stance leg in its
     tilted plane lets it be: a few mm below the planar model's hip at most. (dynamics.csv's hip
-    is interpolated linearly here, up to 1.1 mm off between its nodes 26 ms apart, where the hip
-    decelerates after impact.)"""
+    is interpolated linearly here, up to 1.1 mm off between its nodes 26 ms apart at 5 km/h, where
+    the hip decelerates after impact, and 1.5 mm at 2 km/h, nodes 45 ms apart.)"""
     walk, _, motion, _ = walked
     table = RunData.from_walk(walk, fps=1.0).table
     hip_x = np.interp(motion.t, table["t"], table["hip_x"])
     hip_y = np.interp(motion.t, table["t"], table["hip_y"])
-    np.testing.assert_allclose(motion.root[:, 0], hip_x, atol=1.5e-3)
+    np.testing.assert_allclose(motion.root[:, 0], hip_x, atol=2e-3)
     below = hip_y - motion.root[:, 1]
     print(f"root below the planar hip: {below.min() * 1e3:.2f} to {below.max() * 1e3:.2f} mm")
     assert below.min() > -1.5e-3 and below.max() < 4e-3, (below.min(), below.max())
