@@ -112,6 +112,86 @@ class MovingLabels:
             blend_patch(rgb, self.patches[k], self.row0[k], col0, self.columns)
 
 
+class LiveText:
+    """A one-line text whose string changes every frame (the title's clock), drawn with the Agg
+    renderer's own ``draw_text`` at the place matplotlib's layout gave it once (:meth:`place`):
+    the :class:`~matplotlib.text.Text` artist lays itself out anew at each draw, which cost five
+    times the drawing of its glyphs. Its place is the same for every string as long as the
+    changing characters fit within the height and the descent of the rest (digits in a title)."""
+
+    def __init__(self, text):
+        self.artist, self.text, self.where = text, text.get_text(), None
+        self.axes = None
+
+    def get_zorder(self):
+        return self.artist.get_zorder()
+
+    def set_animated(self, animated: bool) -> None:
+        self.artist.set_animated(animated)
+
+    def set_text(self, text: str) -> None:
+        self.text = text
+
+    def place(self, renderer) -> None:
+        """Lay the artist out once (with its current string) and keep where its line is drawn."""
+        where = []
+
+        class Recorder:          # the renderer, but draw_text only records its arguments
+            def __getattr__(self, name):
+                return getattr(renderer, name)
+
+            def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+                where.append((x, y, prop, angle))
+        self.artist.set_text(self.text)
+        self.artist.draw(Recorder())
+        self.where = where[0]
+
+    def draw(self, renderer) -> None:
+        if self.where is None:
+            self.place(renderer)
+        x, y, prop, angle = self.where
+        gc = renderer.new_gc()
+        gc.set_foreground(self.artist.get_color())
+        gc.set_alpha(self.artist.get_alpha())
+        renderer.draw_text(gc, x, y, self.text, prop, angle)
+        gc.restore()
+
+
+class Blitter:
+    """A figure whose still parts are drawn once: ``moving`` artists are left out of that draw
+    (``animated``), the ``still`` overlays (:class:`StaticText`) blended into its pixels, and a
+    frame is those pixels with the moving artists drawn over them, in their order (matplotlib's
+    blitting). A full draw of the figure per frame cost three times as much: the axes, the still
+    artists and the figure itself were drawn again each time."""
+
+    def __init__(self, fig, moving: list, still: list):
+        # matplotlib's order: the axes in turn, in each its artists by zorder (ties in the order
+        # they were added), then the figure's own (the title)
+        chosen = set(moving)
+        in_axes = [a for ax in fig.axes for a in sorted((a for a in ax.get_children() if a in chosen),
+                                                         key=lambda a: a.get_zorder())]
+        self.moving = in_axes + sorted((a for a in moving if a.axes is None), key=lambda a: a.get_zorder())
+        for artist in self.moving:
+            artist.set_animated(True)
+        fig.canvas.draw()
+        self.renderer = fig.canvas.get_renderer()
+        self.buffer = np.asarray(self.renderer.buffer_rgba())       # the canvas's own pixels (a view)
+        for overlay in still:
+            overlay.blend(self.buffer[..., :3])
+        self.background = self.buffer.copy()
+
+    def pixels(self, overlays: list) -> np.ndarray:
+        """The still pixels, the moving artists drawn over them, then ``overlays`` blended: (h, w,
+        4) uint8 RGBA, a copy."""
+        self.buffer[...] = self.background
+        for artist in self.moving:
+            artist.draw(self.renderer)
+        rgba = self.buffer.copy()
+        for overlay in overlays:
+            overlay.blend(rgba[..., :3])
+        return rgba
+
+
 class PaletteWriter(PillowWriter):
     """matplotlib's PillowWriter (Pillow writes the GIF: no ffmpeg), given each frame's pixels
     (:meth:`Animation.pixels`: one draw, no savefig) as palette images (:class:`Palette`)."""
