@@ -307,8 +307,8 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
 
     # the title (the only text that changes); the legend in the side view's top right corner, where
     # the walker (at SIDE_LEAD of the window) never reaches
-    title = LiveText(fig.text(left / width, 1 - 0.1 / fig_h, f"{run.name}   t = {times[0]:5.2f} s",
-                              fontsize=FONT + 2, va="top", ha="left"))
+    title = LiveText(fig.text(left / width, 1 - 0.1 / fig_h, f"{run.name}   t =", fontsize=FONT + 2, va="top",
+                              ha="left"), "")
     for k, (text, s) in enumerate((("right leg and arm", "right"), ("left leg and arm (far side)", "left"))):
         static.add(side.ax.transAxes, (1.0, 0.99 - 0.055 * k), text, va="top", ha="right", color=LEG_COLOURS[s],
                    fontweight="bold")
@@ -345,7 +345,7 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
         plan.set_ylim(x - PLAN_BEHIND_M, x + PLAN_AHEAD_M)
         path.set_data(root[: i + 1, 2], root[: i + 1, 0])
         here.set_data([root[i, 2]], [x])
-        title.set_text(f"{run.name}   t = {t:5.2f} s")
+        title.set_text(f" {t:5.2f} s")           # after f"{run.name}   t ="
 
     return Animation(fig, frame, len(times), Blitter(fig, moving, [static]), [labels])
 
