@@ -73,7 +73,12 @@ def handle_run(args: argparse.Namespace) -> int:
     config = load(args.config, args.sets, args.method, args.stance, args.fps)
     out = check_output_dir(args.out if args.out is not None else config.output_dir(),
                            "--out" if args.out is not None else "output.dir")
-    check_plots(config, config.output.plots and not args.no_plots)
+    plots = config.output.plots and not args.no_plots
+    animation = config.output.animation and not args.no_animation
+    check_plots(config, plots)
+    if plots or animation:               # the drawing processes import matplotlib while the walk is solved
+        from ..io.render_pool import prewarm
+        prewarm()
     from ..io.results_folder import StagedFolder        # the solvers: only for a valid run
     from ..io.run_writer import RunWriter
     from ..walk import walk_spec
@@ -82,9 +87,7 @@ def handle_run(args: argparse.Namespace) -> int:
     writer = RunWriter(staged.open(), config.resolved_yaml(header), config.output.fps)
     with keeping(staged, lambda: f"{len(writer.done)} completed step(s)"):
         walk, outcome, failure = walk_into(writer, walk_spec(config), quiet=args.quiet)
-        paths, times, outcome, _ = finish_into(writer, walk, outcome,
-                                            plots=config.output.plots and not args.no_plots,
-                                            animation=config.output.animation and not args.no_animation)
+        paths, times, outcome, _ = finish_into(writer, walk, outcome, plots=plots, animation=animation)
     if outcome != "ok":
         return report_unfinished(staged, outcome, failure, f"{len(walk.steps)} completed step(s)")
     staged.commit()
@@ -120,8 +123,14 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
     only. Returns (paths, times, outcome, the walk's RunData or None if interrupted here)."""
     interrupted = outcome == "interrupted"
     try:
-        paths, times, run = writer.finish(walk, plots=plots and not interrupted,
-                                          animation=animation and not interrupted)
+        paths, times, run = writer.finish(walk)
+        drawing = not interrupted and bool(walk.steps)
+        plots, animation = plots and drawing, animation and drawing
+        if plots or animation:
+            from ..io.render_pool import render_outputs       # on every core (docs/performance.md)
+            drawn, times = render_outputs(run, writer.folder / PLOTS_DIR if plots else None,
+                                          writer.folder / GIF_FILE if animation else None)
+            paths.update(drawn)
         return paths, times, outcome, run
     except KeyboardInterrupt:
         walk.status, walk.message = "interrupted", "interrupted (Ctrl-C) while writing the results"
@@ -218,15 +227,15 @@ def configure_plot(p: argparse.ArgumentParser) -> None:
 
 
 def handle_plot(args: argparse.Namespace) -> int:
-    from ..io import RunData, write_rendered
+    from ..io import RunData
     run = RunData.from_folder(args.dir, what="DIR")     # refused before matplotlib is even loaded
     out = check_output_dir(args.out if args.out is not None else Path(args.dir) / PLOTS_DIR, "--out")
-    from ..io.plots import render_plots
-    paths = write_rendered(render_plots(run), out)
+    from ..io.render_pool import render_outputs
+    gif = (Path(args.out) if args.out else Path(args.dir)) / GIF_FILE if args.animation else None
+    paths, _ = render_outputs(run, out, gif)
+    gif = paths.pop("animation", None)
     print(f"{run.name}: wrote {len(paths)} plots to {out}/ ({', '.join(p.name for p in paths.values())})")
     if args.animation:
-        from ..io.animation import write_animation
-        gif = write_animation(run, (Path(args.out) if args.out else Path(args.dir)) / GIF_FILE)
         print(f"{run.name}: wrote {gif}" if gif is not None
               else f"{run.name}: no {GIF_FILE} (no angles.csv with two frames, or no completed step)")
     return EXIT_OK

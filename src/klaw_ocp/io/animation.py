@@ -37,7 +37,7 @@ from matplotlib.transforms import blended_transform_factory
 from ..body import Body
 from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
 from .gait_diagram import gait_events
-from .gif_pixels import FONT, MovingLabels, PaletteWriter, StaticText
+from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, PaletteWriter, StaticText
 from .plot_style import LEG_COLOURS, add_axes_in, new_figure
 from .strobe import GROUND_COLOUR, TRUNK_COLOUR
 from .writers import atomic_path
@@ -307,11 +307,17 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
 
     # the title (the only text that changes); the legend in the side view's top right corner, where
     # the walker (at SIDE_LEAD of the window) never reaches
-    title = fig.text(left / width, 1 - 0.1 / fig_h, "", fontsize=FONT + 2, va="top", ha="left")
+    title = LiveText(fig.text(left / width, 1 - 0.1 / fig_h, f"{run.name}   t =", fontsize=FONT + 2, va="top",
+                              ha="left"), "")
     for k, (text, s) in enumerate((("right leg and arm", "right"), ("left leg and arm (far side)", "left"))):
         static.add(side.ax.transAxes, (1.0, 0.99 - 0.055 * k), text, va="top", ha="right", color=LEG_COLOURS[s],
                    fontweight="bold")
     static.freeze(fig)
+    # what a frame moves: the whole side view (its window follows the walker), the front view's
+    # body and plumb line, the view from above's footprints and path (it scrolls), the title
+    moving = ([*side.ax.collections, *side.ax.lines, *side.ax.patches]
+              + [*front.lines.values(), front.head, plumb, centre]
+              + [*plan_prints.values(), path, here, title])
 
     side_segments = {s: [((f.heel[0], 0.004), (f.toe[0], 0.004)) for f in prints if f.side == s] for _, s in SIDES}
     plan_segments = {s: [((f.heel[2], f.heel[0]), (f.toe[2], f.toe[0])) for f in prints if f.side == s]
@@ -339,29 +345,24 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
         plan.set_ylim(x - PLAN_BEHIND_M, x + PLAN_AHEAD_M)
         path.set_data(root[: i + 1, 2], root[: i + 1, 0])
         here.set_data([root[i, 2]], [x])
-        title.set_text(f"{run.name}   t = {t:5.2f} s")
+        title.set_text(f" {t:5.2f} s")           # after f"{run.name}   t ="
 
-    return Animation(fig, frame, len(times), [static, labels])
+    return Animation(fig, frame, len(times), Blitter(fig, moving, [static]), [labels])
 
 
 @dataclass
 class Animation:
     """walk.gif before it is drawn: ``frame(i)`` moves ``fig`` to frame ``i`` of ``frames``;
-    :meth:`pixels` draws it."""
+    :meth:`pixels` draws it (:class:`~.gif_pixels.Blitter`: the still parts were drawn once)."""
     fig: object
     frame: object
     frames: int
-    overlays: list       # drawn over the figure's pixels (blend(rgb)): the pre-rasterised texts
+    blitter: Blitter
+    overlays: list       # drawn over each frame's pixels (blend(rgb)): the side view's moving labels
 
     def pixels(self) -> np.ndarray:
-        """The figure drawn once on its Agg canvas, with the static texts: (h, w, 4) uint8 RGBA
-        (opaque)."""
-        canvas = self.fig.canvas
-        canvas.draw()
-        rgba = np.array(canvas.buffer_rgba())
-        for overlay in self.overlays:
-            overlay.blend(rgba[..., :3])
-        return rgba
+        """The frame as it stands: (h, w, 4) uint8 RGBA (opaque)."""
+        return self.blitter.pixels(self.overlays)
 
 
 def write_animation(run, path, fps: float = GIF_FPS) -> Path | None:

@@ -112,6 +112,193 @@ class MovingLabels:
             blend_patch(rgb, self.patches[k], self.row0[k], col0, self.columns)
 
 
+class LiveText:
+    """The end of a one-line text that changes every frame (the title's clock). The text's start is
+    an ordinary artist, drawn once with the still parts; the end is drawn with the Agg renderer's
+    own ``draw_text`` just after it, at the place matplotlib's layout gives the start
+    (:meth:`place`): a Text artist lays itself out anew and renders every glyph at each draw,
+    which cost three times the clock's own glyphs. The place holds for every end whose characters
+    fit within the height and descent of the start (digits after a name)."""
+
+    def __init__(self, start, end: str):
+        self.start, self.text, self.where = start, end, None
+        self.axes = None
+
+    def get_zorder(self):
+        return self.start.get_zorder()
+
+    def set_animated(self, animated: bool) -> None:
+        pass                     # the start is still: drawn with the background
+
+    def set_text(self, end: str) -> None:
+        self.text = end
+
+    def place(self, renderer) -> None:
+        """Lay the start out once and keep where the end begins: the start's own line, moved right
+        by the start's advance (the ink width of "|" + start + "|" less that of "||")."""
+        where = []
+
+        class Recorder:          # the renderer, but draw_text only records its arguments
+            def __getattr__(self, name):
+                return getattr(renderer, name)
+
+            def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+                where.append((x, y, prop, angle))
+        self.start.draw(Recorder())
+        x, y, prop, angle = where[0]
+
+        def width(text):
+            return renderer.get_text_width_height_descent(text, prop, False)[0]
+        self.where = (x + width(f"|{self.start.get_text()}|") - width("||"), y, prop, angle)
+
+    def draw(self, renderer) -> None:
+        if self.where is None:
+            self.place(renderer)
+        x, y, prop, angle = self.where
+        gc = renderer.new_gc()
+        gc.set_foreground(self.start.get_color())
+        gc.set_alpha(self.start.get_alpha())
+        renderer.draw_text(gc, x, y, self.text, prop, angle)
+        gc.restore()
+
+
+class FastLine:
+    """A solid line without markers (a :class:`~matplotlib.lines.Line2D`) drawn straight with the
+    renderer's ``draw_path``, in display coordinates, with the line's own style: ``Line2D.draw``
+    rebuilds its path, transform and graphics context at every draw, which cost three times the
+    drawing itself."""
+
+    def __init__(self, line):
+        self.artist, self.axes = line, line.axes
+
+    @staticmethod
+    def fits(artist) -> bool:
+        from matplotlib.lines import Line2D
+        return (isinstance(artist, Line2D) and artist.get_linestyle() == "-" and artist.get_marker() in ("None", None, "")
+                and not artist.get_path_effects() and artist.get_sketch_params() is None)
+
+    def get_zorder(self):
+        return self.artist.get_zorder()
+
+    def set_animated(self, animated: bool) -> None:
+        self.artist.set_animated(animated)
+
+    def draw(self, renderer) -> None:
+        from matplotlib.colors import to_rgba
+        from matplotlib.path import Path
+        from matplotlib.transforms import IdentityTransform
+        line = self.artist
+        x, y = line.get_data()
+        if len(x) == 0:
+            return
+        gc = renderer.new_gc()
+        if line.get_clip_on():
+            gc.set_clip_rectangle(line.get_clip_box())
+        gc.set_antialiased(line.get_antialiased())
+        gc.set_linewidth(line.get_linewidth())
+        gc.set_joinstyle(line.get_solid_joinstyle())
+        gc.set_capstyle(line.get_solid_capstyle())
+        gc.set_snap(line.get_snap())
+        gc.set_foreground(to_rgba(line.get_color(), line.get_alpha()), isRGBA=True)
+        xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+        renderer.draw_path(gc, Path(line.get_transform().transform(xy)), IdentityTransform())
+        gc.restore()
+
+
+class FastSegments:
+    """A :class:`~matplotlib.collections.LineCollection` of one colour and width (ground ticks,
+    footprints) drawn straight with the renderer's ``draw_path``, one call per segment that
+    reaches into its clip box (as the collection draws them, so that translucent ones overlap
+    alike): ``Collection.draw`` prepares every path, its transform and style at every draw,
+    which cost as much as all the lines of a frame."""
+
+    def __init__(self, collection):
+        self.artist, self.axes = collection, collection.axes
+        self._paths, self._xy = None, None
+
+    @staticmethod
+    def fits(artist) -> bool:
+        from matplotlib.collections import LineCollection
+        return (isinstance(artist, LineCollection) and len(artist.get_colors()) <= 1
+                and len(artist.get_linewidths()) == 1 and len(artist.get_linestyles()) == 1
+                and artist.get_linestyles()[0][1] is None and not artist.get_path_effects()
+                and artist.get_offsets().size == 0)
+
+    def get_zorder(self):
+        return self.artist.get_zorder()
+
+    def set_animated(self, animated: bool) -> None:
+        self.artist.set_animated(animated)
+
+    def draw(self, renderer) -> None:
+        from matplotlib.path import Path
+        from matplotlib.transforms import IdentityTransform
+        collection = self.artist
+        paths = collection.get_paths()
+        if paths is not self._paths:                    # new segments (set_segments): read them once
+            self._paths = paths
+            self._xy = [np.asarray(p.vertices, float) for p in paths]
+        if not self._xy or not len(collection.get_colors()):
+            return
+        transform = collection.get_transform()
+        box = collection.get_clip_box() if collection.get_clip_on() else None
+        gc = renderer.new_gc()
+        if box is not None:
+            gc.set_clip_rectangle(box)
+        gc.set_antialiased(bool(collection.get_antialiased()[0]))
+        gc.set_linewidth(float(collection.get_linewidths()[0]))
+        if collection.get_capstyle() is not None:
+            gc.set_capstyle(collection.get_capstyle())
+        if collection.get_joinstyle() is not None:
+            gc.set_joinstyle(collection.get_joinstyle())
+        gc.set_snap(collection.get_snap())
+        gc.set_foreground(tuple(collection.get_colors()[0]), isRGBA=True)
+        pad = renderer.points_to_pixels(float(collection.get_linewidths()[0])) + 2
+        for xy in self._xy:
+            xy = transform.transform(xy)
+            if box is not None and (xy[:, 0].max() < box.x0 - pad or xy[:, 0].min() > box.x1 + pad
+                                    or xy[:, 1].max() < box.y0 - pad or xy[:, 1].min() > box.y1 + pad):
+                continue
+            renderer.draw_path(gc, Path(xy), IdentityTransform())
+        gc.restore()
+
+
+class Blitter:
+    """A figure whose still parts are drawn once: ``moving`` artists are left out of that draw
+    (``animated``), the ``still`` overlays (:class:`StaticText`) blended into its pixels, and a
+    frame is those pixels with the moving artists drawn over them, in their order (matplotlib's
+    blitting). A full draw of the figure per frame cost three times as much: the axes, the still
+    artists and the figure itself were drawn again each time."""
+
+    def __init__(self, fig, moving: list, still: list):
+        # matplotlib's order: the axes in turn, in each its artists by zorder (ties in the order
+        # they were added), then the figure's own (the title)
+        moving = [FastLine(a) if FastLine.fits(a) else FastSegments(a) if FastSegments.fits(a) else a for a in moving]
+        drawer = {getattr(m, "artist", m): m for m in moving}
+        in_axes = [drawer[a] for ax in fig.axes for a in sorted((a for a in ax.get_children() if a in drawer),
+                                                                key=lambda a: a.get_zorder())]
+        self.moving = in_axes + sorted((m for m in moving if m.axes is None), key=lambda m: m.get_zorder())
+        for artist in self.moving:
+            artist.set_animated(True)
+        fig.canvas.draw()
+        self.renderer = fig.canvas.get_renderer()
+        self.buffer = np.asarray(self.renderer.buffer_rgba())       # the canvas's own pixels (a view)
+        for overlay in still:
+            overlay.blend(self.buffer[..., :3])
+        self.background = self.buffer.copy()
+
+    def pixels(self, overlays: list) -> np.ndarray:
+        """The still pixels, the moving artists drawn over them, then ``overlays`` blended: (h, w,
+        4) uint8 RGBA, a copy."""
+        self.buffer[...] = self.background
+        for artist in self.moving:
+            artist.draw(self.renderer)
+        rgba = self.buffer.copy()
+        for overlay in overlays:
+            overlay.blend(rgba[..., :3])
+        return rgba
+
+
 class PaletteWriter(PillowWriter):
     """matplotlib's PillowWriter (Pillow writes the GIF: no ffmpeg), given each frame's pixels
     (:meth:`Animation.pixels`: one draw, no savefig) as palette images (:class:`Palette`)."""
