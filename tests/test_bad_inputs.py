@@ -21,7 +21,8 @@ from pathlib import Path
 import pytest
 
 import klaw_ocp
-from klaw_ocp.config import MAX_YAML_BYTES, ExperimentConfig, load_config, parse_yaml
+from klaw_ocp.config import ExperimentConfig, load_config
+from klaw_ocp.config_yaml import MAX_YAML_BYTES, parse_yaml
 from klaw_ocp.errors import ConfigError, GaitLimitError, KlawError
 
 SRC = Path(__file__).resolve().parents[1] / "src"

@@ -22,7 +22,8 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from klaw_ocp.body import Body
-from klaw_ocp.config import ExperimentConfig, load_config, parse_yaml
+from klaw_ocp.config import ExperimentConfig, load_config
+from klaw_ocp.config_yaml import parse_yaml
 from klaw_ocp.config_paths import apply_sets
 from klaw_ocp.errors import ConfigError
 from klaw_ocp.gait import ATTRIBUTES, LocomotionAttributes, complete_parameters, state_phase_timings

@@ -97,7 +97,7 @@ def parse_values(text: str, path: str = "PATH") -> list:
 
 
 def _parse_scalar(item: str, path: str, flag: str = "--vary", allowed: str = _VARY_ALLOWED):
-    from .config import parse_yaml   # the bounded safe loader of config files
+    from .config_yaml import parse_yaml   # the bounded safe loader of config files
     try:
         value = parse_yaml(item, f"{flag} {path}")
     except ConfigError:

@@ -46,10 +46,10 @@ STATUSES = ("ok", "failed", "error")
 
 def read_mapping(config) -> dict:
     """The experiment as a plain mapping: a dict (copied) or a YAML file (read by the bounded
-    loader of config files, :func:`klaw_ocp.config.read_yaml_file`; not validated here)."""
+    loader of config files, :func:`klaw_ocp.config_yaml.read_yaml_file`; not validated here)."""
     if isinstance(config, dict):
         return copy.deepcopy(config)
-    from .config import read_yaml_file
+    from .config_yaml import read_yaml_file
     data = read_yaml_file(config)
     if not isinstance(data, dict):
         raise ConfigError(out_of_range("config", str(config), "a mapping with name, body, walk"))
