@@ -97,7 +97,25 @@ def step_windows(walk) -> list:
                        moving=s.plan.constraints.step_length != 0) for s in walk.steps]
 
 
-def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray) -> tuple[LegPlanes, np.ndarray, np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class WalkPieces:
+    """What every evaluation of the pelvis and the legs' planes needs from the walk, gathered once
+    (the body asks for the planes at the frames, at each step's toe-off and on the swing foot's
+    guard grid)."""
+    stance: object               # walk_samples.StepCurves of the stance
+    windows: list                # step_windows
+    stance_right: np.ndarray     # (steps,) bool
+    starts: np.ndarray           # (steps,) each step's walk time at its heel strike
+
+    @classmethod
+    def of(cls, walk) -> "WalkPieces":
+        return cls(stance_curves(walk), step_windows(walk),
+                   np.array([stance_leg(k) == "right" for k in range(len(walk.steps))]),
+                   np.array([s.t_start for s in walk.steps]))
+
+
+def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray,
+               pieces: WalkPieces | None = None) -> tuple[LegPlanes, np.ndarray, np.ndarray, np.ndarray]:
     """The pelvis and the legs' planes at the samples: (planes, pelvis centre (n, 3), lean θ2 (n,),
     the simulated hip (n, 2): x and height in the planar model).
 
@@ -106,14 +124,15 @@ def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray) -> tuple[LegPl
     is then where the pelvis angles put it from that hip, at the lateral displacement's z; the
     other hip is where the pelvis puts it (:func:`.pose.hip_positions`)."""
     body, attrs = walk.spec.body, walk.spec.attributes
+    pieces = WalkPieces.of(walk) if pieces is None else pieces
     n = len(samples.t)
-    hip_sim, lean = stance_at(walk, stance_curves(walk), samples.step, samples.tau)
+    hip_sim, lean = stance_at(walk, pieces.stance, samples.step, samples.tau)
     half = attrs.foot_lateral_distance / 2    # the distance between the feet's centrelines
     foot_z = {"right": half, "left": -half}
-    stance_right = np.array([stance_leg(k) == "right" for k in range(len(walk.steps))])[samples.step]
+    stance_right = pieces.stance_right[samples.step]
     offsets = hip_positions(body, np.zeros((n, 3)), pelvis_angles)     # each hip from the pelvis centre
     offset = np.where(stance_right[:, None], offsets["right"], offsets["left"])
-    centre_z = lateral_displacement(attrs, step_windows(walk), samples.t)
+    centre_z = lateral_displacement(attrs, pieces.windows, samples.t)
     dz = centre_z + offset[:, 2] - np.where(stance_right, foot_z["right"], foot_z["left"])
     hip_height = np.sqrt(hip_sim[:, 1] ** 2 - dz ** 2)
     centre = np.column_stack([hip_sim[:, 0] - offset[:, 0], hip_height - offset[:, 1], centre_z])
@@ -174,17 +193,17 @@ def toe_off_ankles(walk, hips_at) -> np.ndarray:
     return legs.ankle + _overreach_pull(legs)
 
 
-def swing_hips(walk, pelvis_at):
+def swing_hips(walk, pelvis_at, pieces: WalkPieces | None = None):
     """``hips_at(step, tau)`` for :func:`.swing_legs.swing_legs`: the simulated hip and the swinging
     leg's own hip in its plane, (n, 2) each, at samples of steps ``step`` and times ``tau``, with
     the pelvis angles ``pelvis_at(t)`` (n, 3) at walk times t."""
-    starts = np.array([s.t_start for s in walk.steps])
-    swinging_left = np.array([stance_leg(k) == "right" for k in range(len(walk.steps))])
+    pieces = WalkPieces.of(walk) if pieces is None else pieces
 
     def hips_at(step, tau):
-        samples = Samples(starts[step] + tau, step, tau)
-        planes, _, _, simulated = leg_planes(walk, samples, pelvis_at(samples.t))
-        own = np.where(swinging_left[step][:, None], planes.hip_in_plane("left"), planes.hip_in_plane("right"))
+        samples = Samples(pieces.starts[step] + tau, step, tau)
+        planes, _, _, simulated = leg_planes(walk, samples, pelvis_at(samples.t), pieces)
+        swinging_left = pieces.stance_right[step][:, None]
+        own = np.where(swinging_left, planes.hip_in_plane("left"), planes.hip_in_plane("right"))
         return simulated, own
     return hips_at
 
@@ -206,13 +225,14 @@ def body_motion(walk, fps: float) -> BodyMotion:
     # level and square for now: the pelvis's determinants (rotation, list) will set these
     pelvis_at = lambda t: np.zeros((len(t), 3))
     pelvis_angles = pelvis_at(samples.t)
-    planes, centre, lean, _ = leg_planes(walk, samples, pelvis_angles)
+    pieces = WalkPieces.of(walk)
+    planes, centre, lean, _ = leg_planes(walk, samples, pelvis_angles, pieces)
     hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
     in_plane, on_ground = ground_legs(walk, samples, hips)
     # at any instant at most one leg swings: both legs' swings in one pass
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
-    hips_at = swing_hips(walk, pelvis_at)
+    hips_at = swing_hips(walk, pelvis_at, pieces)
     swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_ankles(walk, hips_at))
     frames, start, legs = slice(None), 0, {}
     for side, r in swinging.items():
