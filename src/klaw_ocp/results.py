@@ -184,17 +184,20 @@ def swing_foot_clearances(body, steps: list, hips: list) -> list[dict]:
     stacked = np.concatenate(on_grids, axis=1)
     theta5, theta6, lift = lifted_feet(body, [step.swing_foot for step in steps], [leg[0] for leg in legs],
                                        grids, stacked[0:2].T, stacked[2:4].T, stacked[4])
-    entries, stop = [], 0
-    for step, (t, _, ankle, shank) in zip(steps, legs):
-        mine, stop = slice(stop, stop + len(t)), stop + len(t)
-        heel, toe = sole_heights(body, ankle[:, 1] + lift[mine], shank, theta5[mine], theta6[mine])
-        inside = (t > t[0]) & (t < t[-1])
-        swing2 = step.subphase("swing2").t
-        swing2 = (t >= swing2[0]) & (t <= swing2[-1])
-        entries.append({"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
-                        "midswing_toe_min_m": float(toe[swing2].min()),
-                        "ankle_lift_max_m": float(lift[mine].max())})
-    return entries
+    # the heights and their minima of every step at once too (minima are exact in any grouping)
+    t = np.concatenate([leg[0] for leg in legs])
+    counts = [len(leg[0]) for leg in legs]
+    heel, toe = sole_heights(body, np.concatenate([leg[2][:, 1] for leg in legs]) + lift,
+                             np.concatenate([leg[3] for leg in legs]), theta5, theta6)
+    starts = np.cumsum([0, *counts[:-1]])
+    first, last = np.repeat(t[starts], counts), np.repeat(t[starts + np.array(counts) - 1], counts)
+    inside = (t > first) & (t < last)
+    swing2 = np.array([(step.subphase("swing2").t[0], step.subphase("swing2").t[-1]) for step in steps])
+    swing2 = (t >= np.repeat(swing2[:, 0], counts)) & (t <= np.repeat(swing2[:, 1], counts))
+    lowest = lambda values, where: np.minimum.reduceat(np.where(where, values, np.inf), starts).tolist()
+    names = ("toe_min_m", "heel_min_m", "midswing_toe_min_m", "ankle_lift_max_m")
+    values = (lowest(toe, inside), lowest(heel, inside), lowest(toe, swing2), np.maximum.reduceat(lift, starts).tolist())
+    return [dict(zip(names, entry)) for entry in zip(*values)]
 
 
 def _swing_leg(body, step, hips, names):
