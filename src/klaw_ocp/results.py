@@ -149,9 +149,10 @@ def stance_leg(index: int) -> str:
     return "right" if index % 2 == 0 else "left"
 
 
-def walk_table(walk) -> dict:
-    """Column name -> array (``subphase`` is an array of str)."""
-    steps = [_step_columns(step, hips) for step, hips in zip(walk.steps, walk_hips(walk))]
+def walk_table(walk, offsets: list | None = None) -> dict:
+    """Column name -> array (``subphase`` is an array of str); ``offsets``: the walk's
+    :func:`hip_offsets`, when the caller has them."""
+    steps = [_step_columns(step, hips) for step, hips in zip(walk.steps, walk_hips(walk, offsets))]
     references = _hip_reference_curves(walk.steps, walk.spec.body, [columns["t"] for columns in steps])
     for columns, y in zip(steps, references):
         columns["hip_y_ref"] = y
@@ -293,12 +294,14 @@ TIMING_FIELDS = ("wall_s", "real_time_factor")
 SUBPHASE_TIMING_FIELDS = ("wall_s", "build_s")
 
 
-def walk_summary(walk, table: dict | None = None, steps: list | None = None) -> dict:
+def walk_summary(walk, table: dict | None = None, steps: list | None = None, offsets: list | None = None) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results
     (``table``: the walk's :func:`walk_table`, when the caller has it already; ``steps``: the
-    :func:`step_summary` of every step, likewise)."""
+    :func:`step_summary` of every step, ``offsets``: its :func:`hip_offsets`, likewise)."""
     if steps is None:
-        body, offsets = walk.spec.body, (hip_offsets(walk) if walk.steps else [])
+        body = walk.spec.body
+        if offsets is None:
+            offsets = hip_offsets(walk) if walk.steps else []
         hips = [[np.array([step.origin_x, body.l9]) + o for o in step_offsets]
                 for step, step_offsets in zip(walk.steps, offsets)]
         # every step's swing foot in one pass (a pass per step costs mostly numpy's fixed overheads)
