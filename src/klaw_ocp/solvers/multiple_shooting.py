@@ -79,7 +79,7 @@ class MultipleShootingSolver:
         return kernels
 
     def _simulate(self, pb: SubphaseProblem, u: np.ndarray, kernels) -> np.ndarray:
-        return kernels.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), u, pb.context)[0].reshape(self.intervals, -1)
+        return kernels.sim(pb.x0, pb.grid[:-1], pb.h, u, pb.context)[0].reshape(self.intervals, -1)
 
     def _final(self, pb: SubphaseProblem, kernels):
         return lambda xs: kernels.final(xs[-1], pb.context)[0]
@@ -169,7 +169,7 @@ class MultipleShootingSolver:
         spec, n = pb.spec, self.intervals
         states = np.vstack([pb.x0, np.asarray(nodes).reshape(n, spec.nx)])
         if residual is None:
-            t, h = pb.grid[:-1], np.diff(pb.grid)
+            t, h = pb.grid[:-1], pb.h
             final = float(np.max(np.abs(kernels.final(states[-1], pb.context)[0])))
             propagated = kernels.prop(states[:-1], t, h, u, pb.context)[0].reshape(n, spec.nx)
             residual = max(final, float(np.max(np.abs(propagated - states[1:]))))

@@ -132,7 +132,9 @@ class SubphaseProblem:
         if self.path_lower is not None and not callable(self.path_lower):
             lower = np.asarray(self.path_lower, float)
             self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
-        if np.any(np.diff(self.grid) <= 0):
+        #: the intervals' lengths (N,), which every simulation of the problem asks for
+        self.h = np.diff(self.grid)
+        if np.any(self.h <= 0):
             raise ValueError(f"{self.spec.name}: time grid must increase strictly")
 
 
