@@ -54,7 +54,8 @@ def test_dynamics_csv_is_what_the_csv_module_writes():
 @pytest.mark.parametrize("x", [np.array([0.0, 0.1]), np.linspace(0.2, 0.6, 9), 0.3 + np.arange(7) * 0.01,
                                np.array([0.0, 0.013, 0.02, 0.061, 0.07, 0.1])])
 def test_the_tables_knee_rates_are_numpys_gradient_bit_for_bit(x):
-    """dynamics.csv's finite-difference rates (results._gradient): np.gradient's numbers."""
-    from klaw_ocp.results import _gradient
+    """dynamics.csv's and the body's finite-difference rates (walk_samples.gradient): np.gradient's
+    numbers."""
+    from klaw_ocp.kinematics.walk_samples import gradient
     f = np.sin(7 * x) + x ** 3
-    assert _gradient(f, x).tobytes() == np.gradient(f, x).tobytes()
+    assert gradient(f, x).tobytes() == np.gradient(f, x).tobytes()

@@ -29,6 +29,7 @@ from .control.torques import hip_height_reference
 from .dynamics import stance_hips
 from .kinematics.swing_feet import lifted_feet
 from .kinematics.swing_foot import sole_heights
+from .kinematics.walk_samples import gradient
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -68,7 +69,7 @@ def _step_columns(step, hips: list) -> dict:
     stance = step.subphase("stance")
     ds = step.double_support
     n = max(len(ds["t"]) - 1, 0)                # the toe-off node opens swing1
-    rates = [_gradient(ds[c], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
+    rates = [gradient(ds[c], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
              for c in ("theta3", "theta4")]
     nan = np.full(n, np.nan)
     # per subphase: name, t, states, forces, hips, theta3, theta4, theta3d, theta4d, F_theta3, F_theta4
@@ -79,7 +80,7 @@ def _step_columns(step, hips: list) -> dict:
         x, f, t = sub.states[k:], sub.forces[k:], sub.t[k:]
         if sub.name == "swing1":
             # the knee rate: the kinematic drive, by finite differences of theta4
-            rate = _gradient(x[:, 7], step.t_start + t) if len(t) > 1 else np.full(len(t), np.nan)
+            rate = gradient(x[:, 7], step.t_start + t) if len(t) > 1 else np.full(len(t), np.nan)
             angles = (x[:, 6], x[:, 7], x[:, 8], rate)
         elif sub.name == "swing2":
             angles = (x[:, 6], x[:, 7], x[:, 8], x[:, 9])
@@ -98,25 +99,6 @@ def _step_columns(step, hips: list) -> dict:
                        map(joined, range(5, 11))))
     columns["subphase"] = [name for p in parts for name in [p[0]] * len(p[1])]
     return columns
-
-
-def _gradient(f: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """np.gradient(f, x) of 1-D float arrays (two points or more), its operations in its order:
-    central differences weighted by the spacings inside (plain ones where the spacing is
-    uniform), one-sided at the ends. numpy's general form took 50 us a call, three calls a step."""
-    dx = np.diff(x)
-    out = np.empty(len(f))
-    if (dx == dx[0]).all():
-        out[1:-1] = (f[2:] - f[:-2]) / (2. * dx[0])
-    else:
-        dx1, dx2 = dx[:-1], dx[1:]
-        a = -(dx2) / (dx1 * (dx1 + dx2))
-        b = (dx2 - dx1) / (dx1 * dx2)
-        c = dx1 / (dx2 * (dx1 + dx2))
-        out[1:-1] = a * f[:-2] + b * f[1:-1] + c * f[2:]
-    out[0] = (f[1] - f[0]) / dx[0]
-    out[-1] = (f[-1] - f[-2]) / dx[-1]
-    return out
 
 
 def hip_reference_curve(step, body, t_world: np.ndarray) -> np.ndarray:
