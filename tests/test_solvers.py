@@ -84,3 +84,17 @@ def test_plain_shooting_locks_and_unlocks_the_leg():
     assert np.allclose(states[locked, 3], 0.0, atol=1e-12)         # wd = 0 while locked
     k_unlock = int(np.argmin(np.abs(times - t_unlock)))
     assert abs(states[k_unlock, 1]) < 1e-9                          # unlocked as theta1 crosses 0
+
+
+@pytest.mark.parametrize("t0, t1, n, breakpoints", [
+    (0.0, 0.55, 20, [0.1, 0.12, 0.3, 0.45]), (0.12, 0.4, 20, [0.2]), (0.12, 0.4, 20, [0.5]),
+    (-0.0, 1.0, 3, [0.5, 0.5]), (0.3, 0.31, 1, []), (0.0, 1.0, 7, [0.999, 1e-3])])
+def test_time_grid_is_the_linspace_of_each_segment_bit_for_bit(t0, t1, n, breakpoints):
+    """time_grid builds every segment's nodes in one pass: the same numbers as np.linspace."""
+    grid = time_grid(t0, t1, n, breakpoints)
+    edges = [t0, *sorted(b for b in breakpoints if t0 + 1e-9 < b < t1 - 1e-9), t1]
+    on_edges = np.flatnonzero(np.isin(grid, edges))
+    assert len(grid) == n + 1
+    expected = np.concatenate([[t0], *(np.linspace(grid[a], grid[b], b - a + 1)[1:]
+                                       for a, b in zip(on_edges[:-1], on_edges[1:]) if b > a)])
+    assert grid.tobytes() == expected.tobytes()

@@ -49,3 +49,13 @@ def test_dynamics_csv_is_what_the_csv_module_writes():
     writer.writerows(zip(*[table[c].tolist() if c == "subphase" else [int(v) for v in table[c]] if c == "step"
                            else [repr(v) for v in table[c].tolist()] for c in COLUMNS]))
     assert dynamics_csv(None, table) == buffer.getvalue()
+
+
+@pytest.mark.parametrize("x", [np.array([0.0, 0.1]), np.linspace(0.2, 0.6, 9), 0.3 + np.arange(7) * 0.01,
+                               np.array([0.0, 0.013, 0.02, 0.061, 0.07, 0.1])])
+def test_the_tables_knee_rates_are_numpys_gradient_bit_for_bit(x):
+    """dynamics.csv's and the body's finite-difference rates (walk_samples.gradient): np.gradient's
+    numbers."""
+    from klaw_ocp.kinematics.walk_samples import gradient
+    f = np.sin(7 * x) + x ** 3
+    assert gradient(f, x).tobytes() == np.gradient(f, x).tobytes()

@@ -27,7 +27,9 @@ import numpy as np
 from .control.parameter_units import parameter_unit
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
+from .kinematics.swing_feet import lifted_feet
 from .kinematics.swing_foot import sole_heights
+from .kinematics.walk_samples import gradient
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -67,7 +69,7 @@ def _step_columns(step, hips: list) -> dict:
     stance = step.subphase("stance")
     ds = step.double_support
     n = max(len(ds["t"]) - 1, 0)                # the toe-off node opens swing1
-    rates = [np.gradient(ds[c], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
+    rates = [gradient(ds[c], ds["t"]) if len(ds["t"]) > 1 else np.zeros(len(ds["t"]))
              for c in ("theta3", "theta4")]
     nan = np.full(n, np.nan)
     # per subphase: name, t, states, forces, hips, theta3, theta4, theta3d, theta4d, F_theta3, F_theta4
@@ -78,7 +80,7 @@ def _step_columns(step, hips: list) -> dict:
         x, f, t = sub.states[k:], sub.forces[k:], sub.t[k:]
         if sub.name == "swing1":
             # the knee rate: the kinematic drive, by finite differences of theta4
-            rate = np.gradient(x[:, 7], step.t_start + t) if len(t) > 1 else np.full(len(t), np.nan)
+            rate = gradient(x[:, 7], step.t_start + t) if len(t) > 1 else np.full(len(t), np.nan)
             angles = (x[:, 6], x[:, 7], x[:, 8], rate)
         elif sub.name == "swing2":
             angles = (x[:, 6], x[:, 7], x[:, 8], x[:, 9])
@@ -129,9 +131,10 @@ def stance_leg(index: int) -> str:
     return "right" if index % 2 == 0 else "left"
 
 
-def walk_table(walk) -> dict:
-    """Column name -> array (``subphase`` is an array of str)."""
-    steps = [_step_columns(step, hips) for step, hips in zip(walk.steps, walk_hips(walk))]
+def walk_table(walk, offsets: list | None = None) -> dict:
+    """Column name -> array (``subphase`` is an array of str); ``offsets``: the walk's
+    :func:`hip_offsets`, when the caller has them."""
+    steps = [_step_columns(step, hips) for step, hips in zip(walk.steps, walk_hips(walk, offsets))]
     references = _hip_reference_curves(walk.steps, walk.spec.body, [columns["t"] for columns in steps])
     for columns, y in zip(steps, references):
         columns["hip_y_ref"] = y
@@ -169,7 +172,39 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     lifted with the ankle where the dynamic leg is too low for a foot), on the leg interpolated
     linearly between the samples (``hips``: the step's :func:`walk_hips`, when the caller has
     them); ``ankle_lift_max_m`` is how far the body lifted the ankle above the dynamic leg's."""
+    return swing_foot_clearances(body, [step], [hips])[0]
+
+
+def swing_foot_clearances(body, steps: list, hips: list) -> list[dict]:
+    """:func:`swing_foot_clearance` of each of ``steps`` (``hips[k]`` may be None), every step's
+    foot in one pass (:func:`klaw_ocp.kinematics.swing_feet.lifted_feet`)."""
     names = ("swing1", "swing2", "swing3")
+    legs = [_swing_leg(body, step, step_hips, names) for step, step_hips in zip(steps, hips)]
+    grids = [step.swing_foot.guard_grid() for step in steps]
+    on_grids = [[np.interp(grid, t, v) for v in (*hip.T, *ankle.T, shank)]
+                for grid, (t, hip, ankle, shank) in zip(grids, legs)]
+    stacked = np.concatenate(on_grids, axis=1)
+    theta5, theta6, lift = lifted_feet(body, [step.swing_foot for step in steps], [leg[0] for leg in legs],
+                                       grids, stacked[0:2].T, stacked[2:4].T, stacked[4])
+    # the heights and their minima of every step at once too (minima are exact in any grouping)
+    t = np.concatenate([leg[0] for leg in legs])
+    counts = [len(leg[0]) for leg in legs]
+    heel, toe = sole_heights(body, np.concatenate([leg[2][:, 1] for leg in legs]) + lift,
+                             np.concatenate([leg[3] for leg in legs]), theta5, theta6)
+    starts = np.cumsum([0, *counts[:-1]])
+    first, last = np.repeat(t[starts], counts), np.repeat(t[starts + np.array(counts) - 1], counts)
+    inside = (t > first) & (t < last)
+    swing2 = np.array([(step.subphase("swing2").t[0], step.subphase("swing2").t[-1]) for step in steps])
+    swing2 = (t >= np.repeat(swing2[:, 0], counts)) & (t <= np.repeat(swing2[:, 1], counts))
+    lowest = lambda values, where: np.minimum.reduceat(np.where(where, values, np.inf), starts).tolist()
+    names = ("toe_min_m", "heel_min_m", "midswing_toe_min_m", "ankle_lift_max_m")
+    values = (lowest(toe, inside), lowest(heel, inside), lowest(toe, swing2), np.maximum.reduceat(lift, starts).tolist())
+    return [dict(zip(names, entry)) for entry in zip(*values)]
+
+
+def _swing_leg(body, step, hips, names):
+    """The dynamic swing leg at the step's samples of the subphases ``names``: times (n,), the
+    hip and the ankle (n, 2), the shank angle θ3 + θ4 (n,)."""
     subs = [step.subphase(name) for name in names]
     t = np.concatenate([sub.t for sub in subs])
     x = np.vstack([sub.states[:, :7] for sub in subs])
@@ -181,16 +216,7 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     shank = x[:, 6] + theta4
     ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
         - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
-    grid = step.swing_foot.guard_grid()
-    on_grid = lambda v: np.interp(grid, t, v)
-    theta5, theta6, lift = step.swing_foot.lifted_foot(
-        body, t, grid, np.column_stack([on_grid(hips[:, 0]), on_grid(hips[:, 1])]),
-        np.column_stack([on_grid(ankle[:, 0]), on_grid(ankle[:, 1])]), on_grid(shank))
-    heel, toe = sole_heights(body, ankle[:, 1] + lift, shank, theta5, theta6)
-    inside = (t > t[0]) & (t < t[-1])
-    swing2 = (t >= subs[1].t[0]) & (t <= subs[1].t[-1])
-    return {"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
-            "midswing_toe_min_m": float(toe[swing2].min()), "ankle_lift_max_m": float(lift.max())}
+    return t, hips, ankle, shank
 
 
 def foot_events(walk) -> list[dict]:
@@ -214,9 +240,10 @@ def foot_events(walk) -> list[dict]:
     return sorted(events, key=lambda e: (e["time"], order[e["event"]]))
 
 
-def step_summary(spec, step, step_offsets: list | None = None) -> dict:
+def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict | None = None) -> dict:
     """One step's entry of the summary's ``steps`` (it does not change once the step is solved);
-    ``step_offsets``: its hip offsets (:func:`hip_offsets`), when the caller has them."""
+    ``step_offsets``: its hip offsets (:func:`hip_offsets`), ``swing_foot`` its
+    :func:`swing_foot_clearance`, when the caller has them."""
     if step_offsets is None:
         step_offsets = _step_hip_offsets(spec.body, step)
     hips = [np.array([step.origin_x, spec.body.l9]) + offsets for offsets in step_offsets]
@@ -225,7 +252,7 @@ def step_summary(spec, step, step_offsets: list | None = None) -> dict:
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                  hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                  hip_dip_m=hip_dip(spec.body, step.subphases[stance], step_offsets[stance]), notes=list(step.notes),
-                 swing_foot=swing_foot_clearance(spec.body, step, hips),
+                 swing_foot=swing_foot if swing_foot is not None else swing_foot_clearance(spec.body, step, hips),
                  curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
     if step.hip_reference:
         l9, ref = spec.body.l9, step.hip_reference
@@ -249,13 +276,20 @@ TIMING_FIELDS = ("wall_s", "real_time_factor")
 SUBPHASE_TIMING_FIELDS = ("wall_s", "build_s")
 
 
-def walk_summary(walk, table: dict | None = None, steps: list | None = None) -> dict:
+def walk_summary(walk, table: dict | None = None, steps: list | None = None, offsets: list | None = None) -> dict:
     """The JSON-ready summary: status, method, body, timing and per-step subphase results
     (``table``: the walk's :func:`walk_table`, when the caller has it already; ``steps``: the
-    :func:`step_summary` of every step, likewise)."""
+    :func:`step_summary` of every step, ``offsets``: its :func:`hip_offsets`, likewise)."""
     if steps is None:
-        offsets = hip_offsets(walk) if walk.steps else []
-        steps = [step_summary(walk.spec, step, step_offsets) for step, step_offsets in zip(walk.steps, offsets)]
+        body = walk.spec.body
+        if offsets is None:
+            offsets = hip_offsets(walk) if walk.steps else []
+        hips = [[np.array([step.origin_x, body.l9]) + o for o in step_offsets]
+                for step, step_offsets in zip(walk.steps, offsets)]
+        # every step's swing foot in one pass (a pass per step costs mostly numpy's fixed overheads)
+        feet = swing_foot_clearances(body, walk.steps, hips) if walk.steps else []
+        steps = [step_summary(walk.spec, step, step_offsets, foot)
+                 for step, step_offsets, foot in zip(walk.steps, offsets, feet)]
     hip = (table if table is not None else walk_table(walk)) if walk.steps else None
     speed = (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
              if hip is not None and hip["t"][-1] > hip["t"][0] else None)

@@ -49,11 +49,13 @@ class RunData:
         already), the body's angles at ``fps`` frames per second (default: output.fps's)."""
         from ..config import DEFAULT_FPS
         from ..kinematics.body_motion import ANGLES_COLUMNS, body_motion
-        from ..results import walk_summary, walk_table
+        from ..results import hip_offsets, walk_summary, walk_table
+        # the hips of every node, once for the table and the summary
+        offsets = hip_offsets(walk) if walk.steps and (table is None or summary is None) else None
         if table is None:
-            table = walk_table(walk) if walk.steps else _empty_table()
+            table = walk_table(walk, offsets) if walk.steps else _empty_table()
         if summary is None:
-            summary = walk_summary(walk, table)
+            summary = walk_summary(walk, table, offsets=offsets)
         angles = (body_motion(walk, DEFAULT_FPS if fps is None else fps).table() if walk.steps
                   else {c: np.array([]) for c in ANGLES_COLUMNS})
         return cls(name=walk.spec.name, summary=summary, table=table, angles=angles)

@@ -12,10 +12,10 @@ continues the virtual leg, whose knee is the inverse kinematics of the leg's own
 planted foot: there the body's leg starts at the model's ankle and blends into the dynamic
 distance over the first TOE_OFF_BLEND of swing1 (a smoothstep), so no angle jumps.
 
-The foot (:meth:`.swing_foot.SwingFoot.lifted_foot`): the schedule, turned where it would enter
-the ground and, where the leg is too low for any foot, lifted with the ankle by a bend of the knee.
-The guard sees the body's own leg on its grid, so what it keeps above the ground is what the
-skeleton shows.
+The foot (:meth:`.swing_foot.SwingFoot.lifted_foot`; every step's in one pass, :mod:`.swing_feet`):
+the schedule, turned where it would enter the ground and, where the leg is too low for any foot,
+lifted with the ankle by a bend of the knee. The guard sees the body's own leg on its grid, so
+what it keeps above the ground is what the skeleton shows.
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ import numpy as np
 
 from ..dynamics.kinematics import foot_points_arrays
 from .leg_geometry import leg_ik, smoothstep
+from .swing_feet import lifted_feet
 from .walk_samples import swing_curves
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
@@ -70,17 +71,16 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_ankles:
     shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, offset)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
-    swinging = np.unique(step)
+    swinging, counts = np.unique(step, return_counts=True)
     grids = [steps[k].swing_foot.guard_grid() for k in swinging]
     grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
     grid_simulated, grid_own = hips_at(grid_step, grid_t)
     grid_shank, grid_ankle = _body_leg(body, walk, swing, grid_step, grid_t, grid_simulated, grid_own, offset)
-    ends = np.cumsum([len(g) for g in grids])
+    order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
     theta5, theta6, lift = np.empty(len(tau)), np.empty(len(tau)), np.empty(len(tau))
-    for k, grid, end in zip(swinging, grids, ends):
-        mine, on_grid = step == k, slice(end - len(grid), end)
-        theta5[mine], theta6[mine], lift[mine] = steps[k].swing_foot.lifted_foot(
-            body, tau[mine], grid, grid_own[on_grid], grid_ankle[on_grid], grid_shank[on_grid])
+    theta5[order], theta6[order], lift[order] = lifted_feet(
+        body, [steps[k].swing_foot for k in swinging], np.split(tau[order], np.cumsum(counts)[:-1]), grids,
+        grid_own, grid_ankle, grid_shank)
     heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
     up = np.column_stack([np.zeros(len(tau)), lift])   # the foot carried up with the lifted ankle
     ankle, heel, metatarsal, toe = ankle + up, heel + up, metatarsal + up, toe + up

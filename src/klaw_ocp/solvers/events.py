@@ -30,7 +30,7 @@ class EventIntegrator:
         spec = pb.spec
         n = pb.grid.size - 1
         kernels = subphase_kernels(spec, self.substeps, n)
-        fast = kernels.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), u, pb.context)[0].reshape(n, spec.nx)
+        fast = kernels.sim(pb.x0, pb.grid[:-1], pb.h, u, pb.context)[0].reshape(n, spec.nx)
         states = np.vstack([pb.x0, fast])
         start = self._first_sign_change(kernels, pb, states, u) if armed and spec.events else None
         if start is None:

@@ -79,7 +79,7 @@ class MultipleShootingSolver:
         return kernels
 
     def _simulate(self, pb: SubphaseProblem, u: np.ndarray, kernels) -> np.ndarray:
-        return kernels.sim(pb.x0, pb.grid[:-1], np.diff(pb.grid), u, pb.context)[0].reshape(self.intervals, -1)
+        return kernels.sim(pb.x0, pb.grid[:-1], pb.h, u, pb.context)[0].reshape(self.intervals, -1)
 
     def _final(self, pb: SubphaseProblem, kernels):
         return lambda xs: kernels.final(xs[-1], pb.context)[0]
@@ -100,7 +100,7 @@ class MultipleShootingSolver:
         xs = self._simulate(pb, u, kernels)
         res = final(xs)
         for _ in range(8):
-            if not np.all(np.isfinite(res)) or np.max(np.abs(res)) < 1e-3 or len(free) != res.size:
+            if not np.isfinite(res).all() or np.abs(res).max() < 1e-3 or len(free) != res.size:
                 break
             jac = np.empty((res.size, len(free)))
             for j, i in enumerate(free):
@@ -115,7 +115,7 @@ class MultipleShootingSolver:
                 trial = u.copy(); trial[free] += damping * step
                 xs_trial = self._simulate(pb, trial, kernels)
                 res_trial = final(xs_trial)
-                if np.all(np.isfinite(res_trial)) and np.max(np.abs(res_trial)) < np.max(np.abs(res)):
+                if np.isfinite(res_trial).all() and np.abs(res_trial).max() < np.abs(res).max():
                     u, xs, res = trial, xs_trial, res_trial
                     break
             else:
@@ -123,7 +123,7 @@ class MultipleShootingSolver:
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
             call.note("bracket")
             u, xs = self._bracket_guess(pb, free[0], u, kernels)
-        finite = bool(np.all(np.isfinite(xs)))
+        finite = bool(np.isfinite(xs).all())
         return u, (xs if finite else np.where(np.isfinite(xs), xs, np.tile(pb.x0, (self.intervals, 1)))), finite
 
     def _warm(self, pb: SubphaseProblem) -> bool:
@@ -169,18 +169,18 @@ class MultipleShootingSolver:
         spec, n = pb.spec, self.intervals
         states = np.vstack([pb.x0, np.asarray(nodes).reshape(n, spec.nx)])
         if residual is None:
-            t, h = pb.grid[:-1], np.diff(pb.grid)
-            final = float(np.max(np.abs(kernels.final(states[-1], pb.context)[0])))
+            t, h = pb.grid[:-1], pb.h
+            final = float(np.abs(kernels.final(states[-1], pb.context)[0]).max())
             propagated = kernels.prop(states[:-1], t, h, u, pb.context)[0].reshape(n, spec.nx)
-            residual = max(final, float(np.max(np.abs(propagated - states[1:]))))
+            residual = max(final, float(np.abs(propagated - states[1:]).max()))
         forces, path, plausible, _ = kernels.samples(states, pb.grid, u, pb.context)
         path_min = float("inf")
         lower = path_bounds(pb, pb.grid, states)
         if lower is not None:
-            path_min = float(np.min(path - lower))
-        plausible = bool(np.all(np.isfinite(plausible)) and np.all(plausible >= 0))
+            path_min = float((path - lower).min())
+        plausible = bool(np.isfinite(plausible).all() and (plausible >= 0).all())
         ok = (success_hint and residual <= max(10 * self.tolerance, 1e-9)
-              and np.all(np.isfinite(states)) and plausible)
+              and np.isfinite(states).all() and plausible)
         msg = message or ("" if ok else f"residual {residual:.3g} (final conditions and continuity)"
                           + ("" if plausible else ", implausible motion (a root far from any walk)"))
         return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
@@ -229,7 +229,7 @@ class MultipleShootingSolver:
         """
         call.note("homotopy")
         xs = self._simulate(pb, u0, kernels)
-        if not np.all(np.isfinite(xs)):
+        if not np.isfinite(xs).all():
             return None
         g0 = self._final(pb, kernels)(xs)
         u = u0
@@ -246,7 +246,7 @@ class MultipleShootingSolver:
         spec, n = pb.spec, self.intervals
         kernels = self._kernels(pb, call)
         solver = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations)
-        if start is not None and np.all(np.isfinite(start.states)):
+        if start is not None and np.isfinite(start.states).all():
             u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
             u0, xs0, _ = self._initial_guess(pb, [], call, kernels)

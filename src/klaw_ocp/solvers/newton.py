@@ -137,10 +137,10 @@ class CondensedNewton:
 
 def _two_norm(d, g) -> float:
     with np.errstate(over="ignore", invalid="ignore"):   # a diverged trial point is just worse
-        value = float(np.sqrt(np.sum(np.square(d)) + np.sum(np.square(g))))
+        value = float(np.sqrt(np.square(d).sum() + np.square(g).sum()))
     return value if np.isfinite(value) else float("inf")
 
 
 def _max_abs(d, g) -> float:
     values = np.concatenate([np.ravel(d), np.ravel(g)])
-    return float(np.max(np.abs(values))) if np.all(np.isfinite(values)) else float("inf")
+    return float(np.abs(values).max()) if np.isfinite(values).all() else float("inf")

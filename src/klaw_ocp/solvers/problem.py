@@ -16,6 +16,8 @@ solve comes back with ``success = False`` and a message, it does not raise midwa
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import Callable, Optional, Sequence
@@ -130,7 +132,9 @@ class SubphaseProblem:
         if self.path_lower is not None and not callable(self.path_lower):
             lower = np.asarray(self.path_lower, float)
             self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
-        if np.any(np.diff(self.grid) <= 0):
+        #: the intervals' lengths (N,), which every simulation of the problem asks for
+        self.h = np.diff(self.grid)
+        if np.any(self.h <= 0):
             raise ValueError(f"{self.spec.name}: time grid must increase strictly")
 
 
@@ -181,19 +185,25 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
     """
     cuts = sorted(b for b in breakpoints if t0 + 1e-9 < b < t1 - 1e-9)
     edges = [t0, *cuts, t1]
-    lengths = np.diff(edges)
+    # Python floats and ints, not numpy arrays of four: the solvers ask for ~90 grids a walk and
+    # numpy's fixed costs were most of each (the same operations in the same order)
+    lengths = [b - a for a, b in zip(edges[:-1], edges[1:])]
     if n < len(lengths):
         raise ValueError(f"need at least {len(lengths)} intervals for {len(cuts)} breakpoints, got {n}")
-    counts = np.maximum(1, np.floor(lengths / (t1 - t0) * n).astype(int))
-    while counts.sum() < n:
-        counts[np.argmax(lengths / counts)] += 1
-    while counts.sum() > n:
-        candidates = np.where(counts > 1)[0]
-        counts[candidates[np.argmin((lengths / counts)[candidates])]] -= 1
-    nodes = [t0]
-    for a, b, k in zip(edges[:-1], edges[1:], counts):
-        nodes.extend(np.linspace(a, b, k + 1)[1:])
-    return np.array(nodes)
+    counts = [max(1, math.floor(length / (t1 - t0) * n)) for length in lengths]
+    segments = range(len(lengths))
+    while sum(counts) < n:
+        counts[max(segments, key=lambda i: lengths[i] / counts[i])] += 1      # the first largest
+    while sum(counts) > n:
+        counts[min((i for i in segments if counts[i] > 1), key=lambda i: lengths[i] / counts[i])] -= 1
+    # each segment's np.linspace(a, b, k + 1)[1:] in one pass, as linspace computes it: the
+    # node j * ((b - a) / k) + a, and b itself at the segment's end
+    j = np.arange(n + 1.0)
+    j[1:] -= np.repeat(np.cumsum([0, *counts[:-1]]), counts)
+    nodes = j * np.repeat([0.0, *((b - a) / k for a, b, k in zip(edges[:-1], edges[1:], counts))], [1, *counts]) \
+        + np.repeat([t0, *edges[:-1]], [1, *counts])
+    nodes[0], nodes[np.cumsum(counts)] = t0, edges[1:]
+    return nodes
 
 
 @lru_cache(maxsize=None)

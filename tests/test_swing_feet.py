@@ -1,0 +1,75 @@
+"""Every step's swing foot in one pass (kinematics/swing_feet.py) is the per-step form
+(SwingFoot.lifted_foot) to the last bit, on real walks: in the body's swing legs and in the
+summary's swing-foot clearance."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from klaw_ocp.kinematics.swing_feet import lifted_feet
+from klaw_ocp.results import hip_offsets, swing_foot_clearance, swing_foot_clearances
+from klaw_ocp.walk import simulate_walk
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def walk():
+    """A walk from rest to rest: its first and last steps lift the ankle (the dynamic leg too low)."""
+    return simulate_walk(ROOT / "configs" / "start_stop_5kmh.yaml", method="multiple-shooting")
+
+
+def _dynamic_leg_on_grid(body, step, grid):
+    """A smooth stand-in for the leg on the guard grid: hip, ankle (m, 2), shank angle (m,),
+    with the ankle low enough mid-swing that the foot needs both the turn and the lift."""
+    s = (grid - grid[0]) / (grid[-1] - grid[0])
+    hip = np.column_stack([step.origin_x + 0.5 * s, np.full(len(grid), 0.9)])
+    ankle = np.column_stack([hip[:, 0] + 0.3 * np.cos(3 * s), 0.09 - 0.1 * np.sin(np.pi * s)])
+    return hip, ankle, 0.6 * np.sin(4 * s)
+
+
+def test_every_step_at_once_is_each_step_alone(walk):
+    body, steps = walk.spec.body, walk.steps
+    feet = [step.swing_foot for step in steps]
+    grids = [foot.guard_grid() for foot in feet]
+    times = [np.linspace(foot.t_toe_off, foot.t_heel_strike, 7 + k)[::-1] for k, foot in enumerate(feet)]
+    legs = [_dynamic_leg_on_grid(body, step, grid) for step, grid in zip(steps, grids)]
+    together = lifted_feet(body, feet, times, grids, *(np.concatenate(part) for part in zip(*legs)))
+    alone = [foot.lifted_foot(body, t, grid, *leg) for foot, t, grid, leg in zip(feet, times, grids, legs)]
+    for got, expected in zip(together, zip(*alone)):
+        np.testing.assert_array_equal(got, np.concatenate(expected))
+    assert np.concatenate([a[2] for a in alone]).max() > 0.0     # the lift is exercised
+
+
+def test_the_summary_clearance_of_all_steps_is_each_steps_own(walk):
+    body, offsets = walk.spec.body, hip_offsets(walk)
+    hips = [[np.array([step.origin_x, body.l9]) + o for o in step_offsets]
+            for step, step_offsets in zip(walk.steps, offsets)]
+    together = swing_foot_clearances(body, walk.steps, hips)
+    assert together == [swing_foot_clearance(body, step, h) for step, h in zip(walk.steps, hips)]
+    assert together == [_per_step_clearance(body, step, h) for step, h in zip(walk.steps, hips)]
+    assert max(entry["ankle_lift_max_m"] for entry in together) > 0.0
+
+
+def _per_step_clearance(body, step, hips):
+    """The summary's clearance as it was computed before the one-pass form, step by step."""
+    from klaw_ocp.kinematics.swing_foot import sole_heights
+    names = ("swing1", "swing2", "swing3")
+    subs = [step.subphase(name) for name in names]
+    t = np.concatenate([sub.t for sub in subs])
+    x = np.vstack([sub.states[:, :7] for sub in subs])
+    theta4 = np.concatenate([sub.states[:, 7] if sub.name != "swing3" else np.zeros(len(sub.t)) for sub in subs])
+    hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
+    shank = x[:, 6] + theta4
+    ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
+        - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+    grid = step.swing_foot.guard_grid()
+    on_grid = lambda v: np.interp(grid, t, v)
+    theta5, theta6, lift = step.swing_foot.lifted_foot(
+        body, t, grid, np.column_stack([on_grid(hips[:, 0]), on_grid(hips[:, 1])]),
+        np.column_stack([on_grid(ankle[:, 0]), on_grid(ankle[:, 1])]), on_grid(shank))
+    heel, toe = sole_heights(body, ankle[:, 1] + lift, shank, theta5, theta6)
+    inside = (t > t[0]) & (t < t[-1])
+    swing2 = (t >= subs[1].t[0]) & (t <= subs[1].t[-1])
+    return {"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
+            "midswing_toe_min_m": float(toe[swing2].min()), "ankle_lift_max_m": float(lift.max())}
