@@ -7,7 +7,8 @@ import pytest
 
 from klaw_ocp.body import Body
 from klaw_ocp.kinematics.leg_geometry import knee_flexion_for_reach, leg_ik, reach_for_knee_flexion
-from klaw_ocp.kinematics.swing_foot import GUARD_GRID, GUARD_RATE, ankle_lift
+from klaw_ocp.kinematics.swing_feet import ankle_lift
+from klaw_ocp.kinematics.swing_foot import GUARD_GRID, GUARD_RATE
 from klaw_ocp.kinematics.walk_samples import StepCurves
 
 BODY = Body(height=1.8, mass=80.0)

@@ -12,7 +12,8 @@ from hypothesis import example, given, settings, strategies as st
 from klaw_ocp.body import Body
 from klaw_ocp.gait.attributes import LocomotionAttributes
 from klaw_ocp.kinematics.heel_up_roots import MAX_PITCH
-from klaw_ocp.kinematics.swing_foot import GUARD_RATE, rate_limited_turn
+from klaw_ocp.kinematics.swing_feet import rate_limited_turn
+from klaw_ocp.kinematics.swing_foot import GUARD_RATE
 from klaw_ocp.kinematics.virtual_leg import StanceFoot
 
 BODY = Body(1.8, 80)

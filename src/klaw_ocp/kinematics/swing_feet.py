@@ -51,14 +51,15 @@ class _Grids:
         return np.maximum.accumulate(padded, axis=1)[self.row, self.column]
 
     def envelope(self, part, slope):
-        """max_j(part_j - slope |t_i - t_j|) as :func:`.swing_foot.rate_limited_turn` has it."""
+        """max_j(part_j - slope |t_i - t_j|) on each step's grid, as the larger of the running maxima
+        from the left and from the right (O(n), not an n x n matrix)."""
         left = self.running_max(part + slope) - slope
         right = self.running_max(part - slope, backwards=True) + slope
         return np.maximum(left, right)
 
 
 def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
-    """:func:`.swing_foot.rate_limited_turn` of every step at once."""
+    """:func:`rate_limited_turn` of every step at once."""
     turn = np.zeros(len(grids.t))
     ends = rate * np.minimum(grids.since, grids.duration - grids.since)
     slope = rate * grids.since
@@ -68,7 +69,10 @@ def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
 
 
 def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE):
-    """:func:`.swing_foot._cone_envelope` of every step at once."""
+    """The least function at least ``required`` where that is positive and at most it where
+    negative that changes by at most ``rate``, on every step's grid: max_j(part_j - rate |t_i -
+    t_j|) for each sign's part (:meth:`_Grids.envelope`), without the ends' caps of
+    :func:`rate_limited_turn`."""
     out = np.zeros(len(grids.t))
     slope = rate * grids.since
     for sign in (1.0, -1.0):
@@ -77,7 +81,7 @@ def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE):
 
 
 def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
-    """:func:`.swing_foot.ankle_lift` of every step at once."""
+    """:func:`ankle_lift` of every step at once."""
     need = np.maximum(-lowest, 0.0)
     dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
     flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
@@ -87,27 +91,75 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
     return np.where(bend > 0, drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0)
 
 
+def _turned(body, feet: list, on: _Grids, ankle_y, shank):
+    """The schedule of every step on its grid, and the turn of the ground guard (rad) there:
+    (scheduled θ5, θ6, turn), concatenated in order."""
+    schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
+    scheduled, theta6 = schedule_angles(on.t, schedule, _clip)
+    required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
+    turn = _rate_limited_turn(on, required)
+    # the rate-limited turn lags where a large requirement falls off quickly (the schedule itself
+    # moving towards the level sole), and so can overshoot into the other limit: the toe then goes
+    # down where the heel needed the turn; clipped to both limits again, the clip rate-limited too
+    back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
+    return scheduled, theta6, turn + _cone_envelope(on, back)
+
+
+def _at_times(feet: list, times: list, on: _Grids, *on_grid):
+    """θ5 and θ6 of the schedules at each step's own ``times`` (concatenated in order), and each
+    of ``on_grid`` (values on the grids) interpolated linearly to those times."""
+    counts = [len(t) for t in times]
+    at = {name: np.repeat([getattr(f, name) for f in feet], counts) for name in SCHEDULE_FIELDS}
+    theta5, theta6 = schedule_angles(np.concatenate(times), at, _clip)
+    out = [np.empty(len(theta5)) for _ in on_grid]
+    for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
+        grid, mine = on.t[start:end], slice(stop - len(t), stop)
+        for o, values in zip(out, on_grid):
+            o[mine] = np.interp(t, grid, values[start:end])
+    return theta5, theta6, out
+
+
+def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`.swing_foot.SwingFoot.grounded_angles_on_grid` of the steps' swing feet ``feet``, each
+    at its own step-local times ``times[k]`` with its guard grid ``grids[k]``; ``ankle_y`` and
+    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 at the times."""
+    on = _Grids(grids)
+    _, _, turn = _turned(body, feet, on, ankle_y, shank)
+    theta5, theta6, (turn_t,) = _at_times(feet, times, on, turn)
+    return theta5 + turn_t, theta6
+
+
 def lifted_feet(body, feet: list, times: list, grids: list, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:meth:`.swing_foot.SwingFoot.lifted_foot` of the steps' swing feet ``feet``, each at its own
     step-local times ``times[k]`` with its guard grid ``grids[k]``; ``hip``, ``ankle`` (m, 2) and
-    ``shank`` (m,) are the dynamic leg on all grids, concatenated in order. Returns θ5, θ6 and the
+    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 and the
     ankle's lift at the times, concatenated in order."""
     on = _Grids(grids)
-    schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
-    scheduled, theta6 = schedule_angles(on.t, schedule, _clip)
-    ankle_y = ankle[:, 1]
-    required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
-    turn = _rate_limited_turn(on, required)
-    back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
-    turn = turn + _cone_envelope(on, back)
-    # the per-step form interpolates the turn at the grid's own points: there it is the turn itself
-    lowest = lowest_sole_point(body, ankle_y, shank, scheduled + turn, theta6)
+    scheduled, theta6, turn = _turned(body, feet, on, ankle[:, 1], shank)
+    lowest = lowest_sole_point(body, ankle[:, 1], shank, scheduled + turn, theta6)
     lift = _ankle_lift(body, on, hip, ankle, lowest)
-    counts = [len(t) for t in times]
-    at = {name: np.repeat(values[on.starts], counts) for name, values in schedule.items()}
-    theta5_t, theta6_t = schedule_angles(np.concatenate(times), at, _clip)
-    turn_t, lift_t = np.empty(len(theta5_t)), np.empty(len(theta5_t))
-    for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
-        grid, mine = on.t[start:end], slice(stop - len(t), stop)
-        turn_t[mine], lift_t[mine] = np.interp(t, grid, turn[start:end]), np.interp(t, grid, lift[start:end])
+    theta5_t, theta6_t, (turn_t, lift_t) = _at_times(feet, times, on, turn, lift)
     return theta5_t + turn_t, theta6_t, lift_t
+
+
+def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:
+    """The least turn (rad) at the times ``grid`` (increasing) that is at least ``required`` where
+    that is positive and at most it where negative, changes by at most ``rate`` (rad/s) and is 0 at
+    both ends (the foot leaves and lands as the stance foot has it): the cone envelope
+    max_j(part_j - rate |t_i - t_j|) of each sign's part, capped by the ends' cones."""
+    return _rate_limited_turn(_Grids([np.asarray(grid, float)]), np.asarray(required, float), rate)
+
+
+def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowest: np.ndarray) -> np.ndarray:
+    """How far (m) the body lifts the swing ankle above the leg's at the times ``grid`` (a step's
+    :meth:`.swing_foot.SwingFoot.guard_grid`), given the leg's hip and ankle (n, 2) and its foot's
+    lowest point there (:func:`.swing_foot.lowest_sole_point`, with the grounded angles).
+
+    The second stage of the ground guard. Where the leg carries the ankle lower than any foot fits
+    (the straight knee of swing2's end and swing3 with the hip low: first steps from rest, closing
+    steps, slow steps; docs/body.md), turning the foot cannot keep it out of the ground; the body
+    then bends its knee, with the hip and the ankle's x kept, by the least angle that lifts the
+    lowest point of the foot onto the ground, the bend changing by at most GUARD_RATE and 0 at
+    toe-off and heel strike (:func:`rate_limited_turn`). The foot is carried up with the ankle,
+    unturned. Where the foot clears the ground the lift is 0 and the body's leg is the leg given."""
+    return _ankle_lift(body, _Grids([np.asarray(grid, float)]), hip, ankle, lowest)

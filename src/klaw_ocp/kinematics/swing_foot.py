@@ -35,8 +35,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .leg_geometry import knee_flexion_for_reach, reach_for_knee_flexion
-
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
                    "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
@@ -142,9 +140,8 @@ class SwingFoot:
         required turns), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
         same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
         foot continues and becomes the stance foot. Between the grid's points the limits hold to a
-        fraction of a millimetre; a heel that comes up to its landing point from below the ground
-        (the straight leg of swing3 too low: first steps from rest, closing steps) stays below it
-        in the last moments of the swing."""
+        fraction of a millimetre. Where the leg is too low for any foot (first steps from rest,
+        closing steps, slow steps), turning it cannot help: :meth:`lifted_foot` lifts the ankle."""
         grid = self.guard_grid()
         return self.grounded_angles_on_grid(body, t, grid, *leg(grid))
 
@@ -155,28 +152,18 @@ class SwingFoot:
 
     def lifted_foot(self, body, t, grid, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The foot the body shows at step-local times ``t`` (n,): θ5 and θ6 (rad,
-        :meth:`grounded_angles`) and the ankle's lift above the dynamic leg's (m,
-        :func:`ankle_lift`), given the dynamic leg at the times :meth:`guard_grid` ``grid``:
-        its hip and ankle (m, 2) and its shank angle θ3 + θ4 (m,)."""
-        n = len(grid)
-        theta5, theta6 = self.grounded_angles_on_grid(body, np.concatenate([grid, t]), grid, ankle[:, 1], shank)
-        lowest = lowest_sole_point(body, ankle[:, 1], shank, theta5[:n], theta6[:n])
-        return theta5[n:], theta6[n:], np.interp(t, grid, ankle_lift(body, grid, hip, ankle, lowest))
+        :meth:`grounded_angles`) and the ankle's lift above the leg's (m,
+        :func:`.swing_feet.ankle_lift`), given the leg at the times :meth:`guard_grid` ``grid``:
+        its hip and ankle (m, 2) and its shank angle θ3 + θ4 (m,). One step of
+        :func:`.swing_feet.lifted_feet`."""
+        from .swing_feet import lifted_feet    # (swing_feet is built on this module)
+        return lifted_feet(body, [self], [np.asarray(t, float)], [grid], hip, ankle, shank)
 
     def grounded_angles_on_grid(self, body, t, grid, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`grounded_angles` with the leg's ankle height and shank angle at the times
-        :meth:`guard_grid` given (the body evaluates every step's grid in one pass)."""
-        t = np.asarray(t, float)
-        theta5, theta6 = self.angles(np.concatenate([grid, t]))     # the grid's and t's in one call
-        scheduled, n = theta5[:len(grid)], len(grid)
-        required = _ground_clip(body, scheduled, theta6[:n], ankle_y, shank)[0] - scheduled
-        # the rate-limited turn lags where a large requirement falls off quickly (the schedule
-        # itself moving towards the level sole), and so can overshoot into the other limit: the
-        # toe then goes down where the heel needed the turn; clipped to both limits again
-        turn = rate_limited_turn(grid, required)
-        back = _ground_clip(body, scheduled + turn, theta6[:n], ankle_y, shank)[0] - scheduled - turn
-        turn = turn + _cone_envelope(grid, back, GUARD_RATE)
-        return theta5[n:] + np.interp(t, grid, turn), theta6[n:]
+        :meth:`guard_grid` given. One step of :func:`.swing_feet.grounded_feet`."""
+        from .swing_feet import grounded_feet
+        return grounded_feet(body, [self], [np.asarray(t, float)], [grid], ankle_y, shank)
 
 
 def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
@@ -186,62 +173,3 @@ def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
     alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5
     metatarsal = ankle_y - math.sqrt(body.l12 ** 2 - body.l9 ** 2) * np.sin(alpha) + body.l9 * np.cos(alpha)
     return np.minimum(np.minimum(heel, toe), metatarsal)
-
-
-def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowest: np.ndarray) -> np.ndarray:
-    """How far (m) the body lifts the swing ankle above the dynamic leg's at the times ``grid``
-    (a step's :meth:`SwingFoot.guard_grid`), given the dynamic leg's hip and ankle (n, 2) and its
-    foot's lowest point there (:func:`lowest_sole_point`, with the grounded angles).
-
-    The second stage of the ground guard. Where the dynamic leg carries the ankle lower than any
-    foot fits (the straight knee of swing2's end and swing3 with the hip low: first steps from
-    rest, closing steps, slow steps; docs/body.md), turning the foot cannot keep it out of the
-    ground; the body then bends its knee, with the hip and the ankle's x kept, by the least angle
-    that lifts the lowest point of the foot onto the ground, the bend changing by at most
-    GUARD_RATE and 0 at toe-off and heel strike (:func:`rate_limited_turn`). The foot is carried
-    up with the ankle, unturned. Where the foot clears the ground the lift is 0 and the body's
-    leg is the dynamic one."""
-    need = np.maximum(-lowest, 0.0)
-    if not need.any():
-        return np.zeros(len(grid))
-    dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
-    flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
-    wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
-    bend = rate_limited_turn(grid, np.where(need > 0, np.maximum(wanted, 0.0), 0.0))
-    reach = reach_for_knee_flexion(body, flexion + bend)
-    return np.where(bend > 0, drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0)
-
-
-def _cone_envelope(grid: np.ndarray, required: np.ndarray, rate: float) -> np.ndarray:
-    """The least function at least ``required`` where that is positive and at most it where
-    negative that changes by at most ``rate``: max_j(part_j - rate |t_i - t_j|) for each sign's
-    part, as the larger of the running maxima from the left and from the right (O(n))."""
-    out = np.zeros(len(grid))
-    slope = rate * (grid - grid[0])
-    for sign in (1.0, -1.0):
-        part = np.maximum(sign * required, 0.0)
-        if part.any():
-            left = np.maximum.accumulate(part + slope) - slope
-            right = np.maximum.accumulate((part - slope)[::-1])[::-1] + slope
-            out += sign * np.maximum(left, right)
-    return out
-
-
-def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:
-    """The least turn (rad) at the times ``grid`` (increasing) that is at least ``required`` where
-    that is positive and at most it where negative, changes by at most ``rate`` (rad/s) and is 0 at
-    both ends (the foot leaves and lands as the stance foot has it): the cone envelope
-    max_j(part_j - rate |t_i - t_j|) of each sign's part, capped by the ends' cones."""
-    turn = np.zeros(len(grid))
-    since = grid - grid[0]
-    ends = rate * np.minimum(since, since[-1] - since)
-    slope = rate * since
-    for sign in (1.0, -1.0):                     # dorsiflexion (toe), plantarflexion (heel)
-        part = np.maximum(sign * required, 0.0)
-        if part.any():
-            # the envelope as the larger of the running maxima from the left and from the right:
-            # O(n), not an n x n matrix
-            left = np.maximum.accumulate(part + slope) - slope
-            right = np.maximum.accumulate((part - slope)[::-1])[::-1] + slope
-            turn += sign * np.minimum(np.maximum(left, right), ends)
-    return turn
