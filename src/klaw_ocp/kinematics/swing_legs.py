@@ -9,8 +9,9 @@ angle), pointed from its own hip at the model's ankle: the ankle then moves by t
 along the leg, and the knee the body shows is the dynamic one. At heel strike the two hips
 coincide (no lateral displacement), and the heel lands on the planned point. At toe-off the leg
 continues the virtual leg, whose knee is the inverse kinematics of the leg's own hip and the
-planted foot: there the body's leg starts at the model's ankle and blends into the dynamic
-distance over the first TOE_OFF_BLEND of swing1 (a smoothstep), so no angle jumps.
+planted foot: there the body's leg starts at the virtual leg's ankle as the body shows it
+(:func:`.body_motion.toe_off_ankles`) and blends into the model's ankle and the dynamic distance
+over the first TOE_OFF_BLEND of swing1 (a smoothstep), so no angle jumps.
 
 The foot (:meth:`.swing_foot.SwingFoot.lifted_foot`; every step's in one pass, :mod:`.swing_feet`):
 the schedule, turned where it would enter the ground and, where the leg is too low for any foot,
