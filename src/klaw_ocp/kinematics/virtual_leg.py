@@ -236,8 +236,12 @@ class StanceFoot:
         """The rules of the double support: the pitch starts where single support left it and runs
         to ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
         start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
-        return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start,
-                       pitch_toe_off=max(pitch_toe_off, start), push_ease=max(self.push_ease, PUSH_EASE))
+        # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
+        # does not: its heel rising at once keeps the leg from straightening as the hip moves away
+        reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
+        straight = reach >= self.foot.body.l1 * REACH_FRACTION
+        return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start, pitch_toe_off=max(pitch_toe_off, start),
+                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0))
 
 
 #: The rules of :meth:`StanceFoot.pitch` that differ from stance to stance (:func:`rule_pitch`
@@ -349,11 +353,12 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     return hi
 
 
-#: Every foot's push-off eases in from rest over this fraction of the double support. The leg
-#: may be straight when the double support begins (single support lets the knee straighten; a
-#: start from rest), and a heel rising at once would then bend the knee as the square root of
-#: time: 3.6° in the first 2 ms from rest, 15° in steps of 0.6 m at 167 steps/min, whose double
-#: support lasts 17 ms. It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the toe-off
+#: A foot whose leg is straight when the double support begins (single support lets the knee
+#: straighten; a start from rest) eases into its push-off over this fraction of the double
+#: support: a heel rising at once would bend the straight knee as the square root of time (3.6°
+#: in the first 2 ms from rest, 15° in steps of 0.5 m at 167 steps/min). A bent leg does not
+#: ease: a slow heel there lets the hip moving away straighten it, again as a square root (3.2° in
+#: 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the toe-off
 #: posture and rate that start swing1 stay as they were.
 PUSH_EASE = 0.5
 PUSH_EASE_FROM_REST = PUSH_EASE
