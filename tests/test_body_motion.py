@@ -34,7 +34,7 @@ PLANTED_M = 1e-3
 MAX_FRAME_STEP_DEG = 2.0
 WALKS = [("natural_walk", "multiple-shooting"), ("natural_walk", "plain-shooting"),
          ("start_stop_5kmh", "multiple-shooting"), ("start_stop_5kmh", "plain-shooting"),
-         ("start_stop_2kmh", "multiple-shooting")]
+         ("start_stop_2kmh", "multiple-shooting"), ("accelerate", "multiple-shooting")]
 
 
 @pytest.fixture(scope="module", params=WALKS, ids=["-".join(w) for w in WALKS])

@@ -144,3 +144,14 @@ def test_events_have_every_heel_strike_and_toe_off_of_both_legs(walk_kind):
         inside = [name for t, s, name in events if s == side and step.t_start - 1e-12 <= t <= t_end + 1e-12]
         assert inside[-1] == "toe_off" and "foot_flat" in inside and "heel_off" in inside
         assert inside.index("foot_flat") < inside.index("heel_off") < inside.index("toe_off")
+
+
+def test_single_support_keeps_the_leg_a_little_short_of_straight_by_the_other_heel_strike():
+    """virtual_leg.single_reach_fraction: l1 where the foot comes flat (continuous with the rocker),
+    REACH_FRACTION at the other leg's heel strike, never rising in between, so the stance knee
+    meets its limit at a finite rate instead of straightening as the square root of time."""
+    from klaw_ocp.kinematics.virtual_leg import REACH_FRACTION, single_reach_fraction
+    t = np.linspace(0.05, 0.6, 56)
+    f = single_reach_fraction(t, 0.05, 0.6)
+    assert f[0] == 1.0 and f[-1] == pytest.approx(REACH_FRACTION, abs=1e-15)
+    assert np.all(np.diff(f) <= 0) and np.all(f >= REACH_FRACTION)

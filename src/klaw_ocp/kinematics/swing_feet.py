@@ -88,7 +88,8 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
     wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
     bend = _rate_limited_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0))
     reach = reach_for_knee_flexion(body, flexion + bend)
-    return np.where(bend > 0, drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0)
+    # (>= 0: where the bend is a round-off above 0, the distance's round-off could lower the ankle)
+    return np.where(bend > 0, np.maximum(drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0), 0.0)
 
 
 def _turned(body, feet: list, on: _Grids, ankle_y, shank):

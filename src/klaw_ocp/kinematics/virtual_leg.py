@@ -139,10 +139,10 @@ class StanceFoot:
 
     def reach_pitch(self, hips: np.ndarray, fraction=1.0) -> np.ndarray:
         """The least pitch >= 0 at which the leg reaches its ankle with the hip-ankle distance
-        ``fraction`` of l1 (a scalar or one per sample). Single support lets the knee straighten
-        (1); the double support bends it towards REACH_FRACTION by toe-off, where swing1 takes
-        over its rates. In closed form (:func:`.heel_up_roots.reach_pitch`): the distance to the
-        hip falls as the heel rises."""
+        ``fraction`` of l1 (a scalar or one per sample): l1 where the foot comes flat, easing to
+        REACH_FRACTION by the other leg's heel strike (:func:`single_reach_fraction`), where the
+        double support keeps it to toe-off and swing1 takes over its rates. In closed form
+        (:func:`.heel_up_roots.reach_pitch`): the distance to the hip falls as the heel rises."""
         hips = np.asarray(hips, float)
         return heel_up_roots.reach_pitch(self.foot, self.meta_off_theta6, self.heel_off_theta5, hips,
                                          self.foot.body.l1 * np.asarray(fraction, float))
@@ -191,7 +191,9 @@ class StanceFoot:
         other leg's heel strike if the heel stays down that long."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
         first = self.t_step
-        triggers = self._flat_triggers(hips)
+        limit, distance = self._flat_triggers(hips)
+        fraction = single_reach_fraction(t, self.t_flat, self.t_step)
+        triggers = (limit, distance + self.foot.body.l1 * (1 - fraction))
         for g in triggers:
             up = np.flatnonzero((g > 0) & (t >= self.t_flat))
             if not up.size:
@@ -206,7 +208,7 @@ class StanceFoot:
         rule = np.zeros(len(t))
         if after.any():     # the searches only where the heel is off
             rule[after] = np.maximum(self.ankle_limit_pitch(hips[after], triggers[0][after]),
-                                     self.reach_pitch(hips[after]))
+                                     self.reach_pitch(hips[after], fraction[after]))
         held = np.maximum.accumulate(rule)
         # the heel leaves the ground at ``first``: the held pitch rises from 0 there, not along the
         # line between the nodes around it (which would lift the heel by a jump)
@@ -239,7 +241,7 @@ class StanceFoot:
         # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
         # does not: its heel rising at once keeps the leg from straightening as the hip moves away
         reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
-        straight = reach >= self.foot.body.l1 * REACH_FRACTION
+        straight = reach >= self.foot.body.l1 * (REACH_FRACTION - 1e-9)
         return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start, pitch_toe_off=max(pitch_toe_off, start),
                        push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0))
 
@@ -248,6 +250,17 @@ class StanceFoot:
 #: takes them as numbers or one per sample: :mod:`.stance_legs` evaluates many stances at once).
 RULE_FIELDS = ("t_flat", "rocker_pitch", "rocker_rate", "t_heel_off", "t_step", "t_toe_off", "pitch_ds_start",
                "pitch_toe_off", "push_ease")
+
+
+def single_reach_fraction(t, t_flat, t_step):
+    """The hip-ankle distance, as a fraction of l1, that single support lets the leg reach at its
+    stance times ``t``: l1 when the foot is flat (the rocker's end, continuous with it), easing to
+    REACH_FRACTION by the other leg's heel strike (a smoothstep), where the double support keeps
+    it. A leg allowed to go fully straight straightens as the square root of time (up to 3.6° of
+    knee in the last 2 ms of single support in configs/accelerate.yaml); kept REACH_FRACTION short,
+    its knee meets that limit at a finite rate."""
+    s = np.clip((np.asarray(t, float) - t_flat) / np.maximum(np.asarray(t_step, float) - t_flat, 1e-12), 0.0, 1.0)
+    return 1 - (1 - REACH_FRACTION) * s * s * (3 - 2 * s)
 
 
 def _rocker_left(t, t_flat):
@@ -285,7 +298,7 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
                                       at("rocker_rate", rocker))
     single = ~rocker & (t >= rules["t_heel_off"]) & (t < rules["t_step"])
     if single.any():
-        pitch[single] = reach(hips[single])
+        pitch[single] = reach(hips[single], single_reach_fraction(t[single], at("t_flat", single), at("t_step", single)))
         kept = held(t, single)
         if kept is not None:
             pitch[single] = np.maximum(pitch[single], kept)
@@ -298,7 +311,10 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
             through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
         start, end = at("pitch_ds_start", push), at("pitch_toe_off", push)
         linear = start + (end - start) * through
-        pitch[push] = np.maximum(linear, reach(hips[push], 1 - (1 - REACH_FRACTION) * through))
+        # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
+        # stood still) to REACH_FRACTION by toe-off
+        left = single_reach_fraction(t_step, at("t_flat", push), t_step)
+        pitch[push] = np.maximum(linear, reach(hips[push], left + (REACH_FRACTION - left) * through))
     return pitch
 
 
@@ -353,13 +369,13 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     return hi
 
 
-#: A foot whose leg is straight when the double support begins (single support lets the knee
-#: straighten; a start from rest) eases into its push-off over this fraction of the double
-#: support: a heel rising at once would bend the straight knee as the square root of time (3.6°
-#: in the first 2 ms from rest, 15° in steps of 0.5 m at 167 steps/min). A bent leg does not
-#: ease: a slow heel there lets the hip moving away straighten it, again as a square root (3.2° in
-#: 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the toe-off
-#: posture and rate that start swing1 stay as they were.
+#: A foot whose leg is at its reach when the double support begins (single support leaves it
+#: REACH_FRACTION short of full stretch; a start from rest) eases into its push-off over this
+#: fraction of the double support: a heel rising at once would bend the knee as the square root of
+#: time (3.6° in the first 2 ms from rest, 15° in steps of 0.5 m at 167 steps/min). A bent leg does
+#: not ease: a slow heel there lets the hip moving away straighten it, again as a square root
+#: (3.2° in 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the
+#: toe-off posture and rate that start swing1 follow from the push's line.
 PUSH_EASE = 0.5
 PUSH_EASE_FROM_REST = PUSH_EASE
 
