@@ -162,26 +162,49 @@ class LiveText:
         gc.restore()
 
 
-class FastLine:
-    """A solid line without markers (a :class:`~matplotlib.lines.Line2D`) drawn straight with the
-    renderer's ``draw_path``, in display coordinates, with the line's own style: ``Line2D.draw``
-    rebuilds its path, transform and graphics context at every draw, which cost three times the
-    drawing itself."""
+class _FastArtist:
+    """What :class:`FastLine` and :class:`FastSegments` share: they stand in for their matplotlib
+    artist in :class:`Blitter` (its z-order and ``animated`` flag) and draw with one graphics
+    context set up from the artist's style."""
 
-    def __init__(self, line):
-        self.artist, self.axes = line, line.axes
-
-    @staticmethod
-    def fits(artist) -> bool:
-        from matplotlib.lines import Line2D
-        return (isinstance(artist, Line2D) and artist.get_linestyle() == "-" and artist.get_marker() in ("None", None, "")
-                and not artist.get_path_effects() and artist.get_sketch_params() is None)
+    def __init__(self, artist):
+        self.artist, self.axes = artist, artist.axes
 
     def get_zorder(self):
         return self.artist.get_zorder()
 
     def set_animated(self, animated: bool) -> None:
         self.artist.set_animated(animated)
+
+    @staticmethod
+    def _gc(renderer, box, antialiased, linewidth, joinstyle, capstyle, snap, rgba):
+        """A graphics context clipped to ``box`` (None: not clipped) with this style (a None join
+        or cap style keeps the renderer's)."""
+        gc = renderer.new_gc()
+        if box is not None:
+            gc.set_clip_rectangle(box)
+        gc.set_antialiased(antialiased)
+        gc.set_linewidth(linewidth)
+        if joinstyle is not None:
+            gc.set_joinstyle(joinstyle)
+        if capstyle is not None:
+            gc.set_capstyle(capstyle)
+        gc.set_snap(snap)
+        gc.set_foreground(rgba, isRGBA=True)
+        return gc
+
+
+class FastLine(_FastArtist):
+    """A solid line without markers (a :class:`~matplotlib.lines.Line2D`) drawn straight with the
+    renderer's ``draw_path``, in display coordinates, with the line's own style: ``Line2D.draw``
+    rebuilds its path, transform and graphics context at every draw, which cost three times the
+    drawing itself."""
+
+    @staticmethod
+    def fits(artist) -> bool:
+        from matplotlib.lines import Line2D
+        return (isinstance(artist, Line2D) and artist.get_linestyle() == "-" and artist.get_marker() in ("None", None, "")
+                and not artist.get_path_effects() and artist.get_sketch_params() is None)
 
     def draw(self, renderer) -> None:
         from matplotlib.colors import to_rgba
@@ -191,21 +214,15 @@ class FastLine:
         x, y = line.get_data()
         if len(x) == 0:
             return
-        gc = renderer.new_gc()
-        if line.get_clip_on():
-            gc.set_clip_rectangle(line.get_clip_box())
-        gc.set_antialiased(line.get_antialiased())
-        gc.set_linewidth(line.get_linewidth())
-        gc.set_joinstyle(line.get_solid_joinstyle())
-        gc.set_capstyle(line.get_solid_capstyle())
-        gc.set_snap(line.get_snap())
-        gc.set_foreground(to_rgba(line.get_color(), line.get_alpha()), isRGBA=True)
+        gc = self._gc(renderer, line.get_clip_box() if line.get_clip_on() else None, line.get_antialiased(),
+                      line.get_linewidth(), line.get_solid_joinstyle(), line.get_solid_capstyle(), line.get_snap(),
+                      to_rgba(line.get_color(), line.get_alpha()))
         xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
         renderer.draw_path(gc, Path(line.get_transform().transform(xy)), IdentityTransform())
         gc.restore()
 
 
-class FastSegments:
+class FastSegments(_FastArtist):
     """A :class:`~matplotlib.collections.LineCollection` of one colour and width (ground ticks,
     footprints) drawn straight with the renderer's ``draw_path``, one call per segment that
     reaches into its clip box (as the collection draws them, so that translucent ones overlap
@@ -213,7 +230,7 @@ class FastSegments:
     which cost as much as all the lines of a frame."""
 
     def __init__(self, collection):
-        self.artist, self.axes = collection, collection.axes
+        super().__init__(collection)
         self._paths, self._xy = None, None
 
     @staticmethod
@@ -223,12 +240,6 @@ class FastSegments:
                 and len(artist.get_linewidths()) == 1 and len(artist.get_linestyles()) == 1
                 and artist.get_linestyles()[0][1] is None and not artist.get_path_effects()
                 and artist.get_offsets().size == 0)
-
-    def get_zorder(self):
-        return self.artist.get_zorder()
-
-    def set_animated(self, animated: bool) -> None:
-        self.artist.set_animated(animated)
 
     def draw(self, renderer) -> None:
         from matplotlib.path import Path
@@ -242,17 +253,9 @@ class FastSegments:
             return
         transform = collection.get_transform()
         box = collection.get_clip_box() if collection.get_clip_on() else None
-        gc = renderer.new_gc()
-        if box is not None:
-            gc.set_clip_rectangle(box)
-        gc.set_antialiased(bool(collection.get_antialiased()[0]))
-        gc.set_linewidth(float(collection.get_linewidths()[0]))
-        if collection.get_capstyle() is not None:
-            gc.set_capstyle(collection.get_capstyle())
-        if collection.get_joinstyle() is not None:
-            gc.set_joinstyle(collection.get_joinstyle())
-        gc.set_snap(collection.get_snap())
-        gc.set_foreground(tuple(collection.get_colors()[0]), isRGBA=True)
+        gc = self._gc(renderer, box, bool(collection.get_antialiased()[0]), float(collection.get_linewidths()[0]),
+                      collection.get_joinstyle(), collection.get_capstyle(), collection.get_snap(),
+                      tuple(collection.get_colors()[0]))
         pad = renderer.points_to_pixels(float(collection.get_linewidths()[0])) + 2
         for xy in self._xy:
             xy = transform.transform(xy)
