@@ -227,8 +227,8 @@ def test_fallbacks_column_reads_the_summary(monkeypatch):
     import klaw_ocp.results as results
     original = results.walk_summary
 
-    def with_fallbacks(walk):
-        summary = original(walk)
+    def with_fallbacks(walk, *args, **kwargs):
+        summary = original(walk, *args, **kwargs)
         summary["steps"][1]["subphases"][2]["fallbacks"] = ["ipopt", "smaller-step"]
         return summary
 

@@ -143,9 +143,7 @@ def _check_events(text: str, source: str) -> None:
             add(event, nodes, nesting)
             child(("alias",))
         elif isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
-            add(event, 1, 1)
-            if stack and stack[-1].mapping and stack[-1].children % 2 == 0:
-                pass  # a mapping or list as a key: the loader refuses it (unhashable)
+            add(event, 1, 1)       # (a mapping or list as a key: the loader refuses it, unhashable)
             stack.append(_Frame(isinstance(event, yaml.MappingStartEvent), event.anchor, count - 1,
                                 len(stack) + 1))
         elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):

@@ -45,15 +45,18 @@ def hip_offsets(walk) -> list:
     return [[next(offsets) for _ in step.subphases] for step in walk.steps]
 
 
-def _step_hip_offsets(body, step) -> list:
+def step_hip_offsets(body, step) -> list:
     """:func:`hip_offsets` of one step ([subphase]), in one call of the stance kinematics."""
     offsets = stance_hips(body, np.vstack([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
     return np.split(offsets, np.cumsum([len(sub.states) for sub in step.subphases])[:-1])
 
 
-def _step_hips(body, step) -> list:
-    """The world hip (n, 2) at every node of every subphase of one step ([subphase])."""
-    return [np.array([step.origin_x, body.l9]) + offsets for offsets in _step_hip_offsets(body, step)]
+def _step_hips(body, step, step_offsets: list | None = None) -> list:
+    """The world hip (n, 2) at every node of every subphase of one step ([subphase]), from its
+    :func:`hip_offsets` when the caller has them."""
+    if step_offsets is None:
+        step_offsets = step_hip_offsets(body, step)
+    return [np.array([step.origin_x, body.l9]) + offsets for offsets in step_offsets]
 
 
 def walk_hips(walk, offsets: list | None = None) -> list:
@@ -142,10 +145,11 @@ def walk_table(walk, offsets: list | None = None) -> dict:
             np.concatenate([columns[c] for columns in steps]).astype(float) for c in COLUMNS}
 
 
-def step_table(step, body) -> dict:
+def step_table(step, body, step_offsets: list | None = None) -> dict:
     """The rows of one step in :func:`walk_table`'s columns: a walk's table is its steps' tables
-    one after the other (no row depends on a later step), so a run can write them as they come."""
-    columns = _step_columns(step, _step_hips(body, step))
+    one after the other (no row depends on a later step), so a run can write them as they come
+    (``step_offsets``: its :func:`hip_offsets`, when the caller has them)."""
+    columns = _step_columns(step, _step_hips(body, step, step_offsets))
     columns["hip_y_ref"] = _hip_reference_curves([step], body, [columns["t"]])[0]
     return {c: np.array(list(columns[c])) if c == "subphase" else np.asarray(columns[c]).astype(float)
             for c in COLUMNS}
@@ -244,9 +248,7 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
     """One step's entry of the summary's ``steps`` (it does not change once the step is solved);
     ``step_offsets``: its hip offsets (:func:`hip_offsets`), ``swing_foot`` its
     :func:`swing_foot_clearance`, when the caller has them."""
-    if step_offsets is None:
-        step_offsets = _step_hip_offsets(spec.body, step)
-    hips = [np.array([step.origin_x, spec.body.l9]) + offsets for offsets in step_offsets]
+    hips = _step_hips(spec.body, step, step_offsets)
     stance = [sub.name for sub in step.subphases].index("stance")
     entry = step.plan.as_dict()
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
@@ -272,8 +274,6 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
 
 #: The summary's fields that time the run and change from run to run (in ``steps[].subphases[]``:
 #: ``wall_s`` and ``build_s``); everything else is the same for the same config.
-TIMING_FIELDS = ("wall_s", "real_time_factor")
-SUBPHASE_TIMING_FIELDS = ("wall_s", "build_s")
 
 
 def walk_summary(walk, table: dict | None = None, steps: list | None = None, offsets: list | None = None) -> dict:
@@ -290,10 +290,17 @@ def walk_summary(walk, table: dict | None = None, steps: list | None = None, off
         feet = swing_foot_clearances(body, walk.steps, hips) if walk.steps else []
         steps = [step_summary(walk.spec, step, step_offsets, foot)
                  for step, step_offsets, foot in zip(walk.steps, offsets, feet)]
-    hip = (table if table is not None else walk_table(walk)) if walk.steps else None
-    speed = (3.6 * (hip["hip_x"][-1] - hip["hip_x"][0]) / (hip["t"][-1] - hip["t"][0])
-             if hip is not None and hip["t"][-1] > hip["t"][0] else None)
-    return summary_of(walk, steps, speed)
+    hip = (table if table is not None else walk_table(walk, offsets)) if walk.steps else None
+    return summary_of(walk, steps, mean_hip_speed_kmh(hip, hip) if hip is not None else None)
+
+
+def mean_hip_speed_kmh(first: dict, last: dict):
+    """The mean hip speed (km/h) from the first row of the table ``first`` to the last of ``last``
+    (tables as :func:`walk_table` makes them; one walk's, or its first and last steps'), None
+    for no time between them."""
+    if last["t"][-1] <= first["t"][0]:
+        return None
+    return 3.6 * (last["hip_x"][-1] - first["hip_x"][0]) / (last["t"][-1] - first["t"][0])
 
 
 def summary_of(walk, steps: list, mean_hip_speed_kmh) -> dict:

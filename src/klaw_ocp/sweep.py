@@ -156,9 +156,11 @@ def run_walk(mapping: dict, method: str) -> dict:
 def _walk_metrics(walk, keep_residual: bool) -> dict:
     import numpy as np
 
-    from .results import walk_summary, walk_table
+    from .results import hip_offsets, walk_summary, walk_table
 
-    summary, table = walk_summary(walk), walk_table(walk)
+    offsets = hip_offsets(walk) if walk.steps else []       # the stance hips once, for both
+    table = walk_table(walk, offsets)
+    summary = walk_summary(walk, table, offsets=offsets)
     subs = [(entry.get("index", k), s) for k, entry in enumerate(summary["steps"]) for s in entry["subphases"]]
     residuals = [s["residual"] for _, s in subs if s.get("residual") is not None]
     out = {"steps": len(walk.steps), "iterations": int(sum(s.get("iterations", 0) for _, s in subs)),

@@ -23,10 +23,10 @@ def load(config_path, sets=(), method: str | None = None, stance: str | None = N
     """The validated experiment of ``config_path`` with its ``--set`` overrides and the
     ``--method``/``--stance``/``--fps`` flags folded in (so that the resolved config reproduces
     the run; ``fps`` as typed, validated like ``--set output.fps=...``)."""
-    from ..config import check_stance_method, load_config
+    from ..config import MAX_FPS, check_stance_method, load_config
     extra = list(sets or ())
     if fps is not None and not str(fps).strip():
-        raise ConfigError(f"--fps: got {short_repr(fps)}, allowed a number > 0 and <= 1000 (frames per second)")
+        raise ConfigError(f"--fps: got {short_repr(fps)}, allowed a number > 0 and <= {MAX_FPS:g} (frames per second)")
     if method:
         extra.append(f"solver.method={method}")
     if stance:

@@ -123,7 +123,8 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
     only. Returns (paths, times, outcome, the walk's RunData or None if interrupted here)."""
     interrupted = outcome == "interrupted"
     try:
-        paths, times, run = writer.finish(walk)
+        paths, run = writer.finish(walk)
+        times = {"plots": None, "animation": None}
         drawing = not interrupted and bool(walk.steps)
         plots, animation = plots and drawing, animation and drawing
         if plots or animation:

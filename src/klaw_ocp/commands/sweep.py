@@ -40,7 +40,7 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
-    from ..config_paths import format_value
+    from ..config_paths import combination_label
     from ..errors import Interrupted
     from ..io.results_folder import StagedFolder
     from ..io.writers import atomic_write_text
@@ -83,7 +83,7 @@ def handle(args: argparse.Namespace) -> int:
         return EXIT_OK
     # a walk that does not converge is one of the sweep's results: the folder is complete
     first = next(r for r in rows if r["status"] != "ok")
-    label = ", ".join(f"{k}={format_value(first[k])}" for k in vary)
+    label = combination_label({k: first[k] for k in vary})
     print(f"{PROG}: error: {len(rows) - n['ok']} of {len(rows)} walks did not converge or failed, the first "
           f"{label} ({first['method']}): {first['message']}; see {out / 'sweep.csv'}", file=sys.stderr)
     return EXIT_SOLVER_FAILED

@@ -220,9 +220,9 @@ class StepController:
         x_to, hip_to, hip_vel_to = stance.states[k_to], hips[k_to], hip_vels[k_to]
         hind = inp.hind_foot
         t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
-        pitch_to = toe_off_pitch(hind, hip_to, hind.pitch_at_other_heel_strike(hips[0]),
-                                 math.radians(a.toe_off_foot_pitch), con.theta3)
-        hind = hind.with_double_support(hips[0], t_to, pitch_to)
+        pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
+        pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, math.radians(a.toe_off_foot_pitch), con.theta3)
+        hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds)
         ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
         legs = hind.frames(t0 + stance.t[ds_nodes], hips[ds_nodes])
         ds = {"t": stance.t[ds_nodes], "theta3": legs.theta3, "theta4": legs.theta4, "pitch": legs.pitch}

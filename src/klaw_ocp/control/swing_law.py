@@ -138,8 +138,8 @@ def swing2_forces(x, t, u, c):
 
 def swing2_clearance(x, t, u, c):
     """Toe tip and heel heights of the swing foot: the toe kept ``toe_clearance`` above the
-    ground (§4.3's recovery), the heel above it (the knee extends towards a foot that is still
-    dorsiflexed)."""
+    ground (§4.3's recovery); the heel reported only (its lower bound is -inf: control/step.py,
+    docs/paper-map.md)."""
     _, _, hip, _, _ = stance_part(x[0:6], t, c)
     heel, toe = foot(x[6:8], hip, t, c)
     return ca.vertcat(toe[1], heel[1])

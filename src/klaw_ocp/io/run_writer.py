@@ -30,15 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import COLUMNS, step_summary, step_table, summary_of
+from ..results import COLUMNS, step_hip_offsets, mean_hip_speed_kmh, step_summary, step_table, summary_of
 from .writers import atomic_write_bytes, dynamics_csv, events_csv, render_body, summary_text, write_rendered
 
 DYNAMICS_FILE = "dynamics.csv"
 SUMMARY_FILE = "summary.json"
 EVENTS_FILE = "events.csv"
 RESOLVED_FILE = "config.resolved.yaml"
-PLOTS_DIR = "plots"
-GIF_FILE = "walk.gif"        # = klaw_ocp.io.animation.GIF_FILE (not imported here: it loads matplotlib)
 
 
 class RunWriter:
@@ -83,8 +81,9 @@ class RunWriter:
 
     def _catch_up(self, walk) -> None:
         for step in walk.steps[len(self.done):]:
-            table = step_table(step, walk.spec.body)
-            entry = step_summary(walk.spec, step)
+            offsets = step_hip_offsets(walk.spec.body, step)     # the stance hips once, for both
+            table = step_table(step, walk.spec.body, offsets)
+            entry = step_summary(walk.spec, step, offsets)
             text = json.dumps(entry, allow_nan=False)
             size = self._append(dynamics_csv(None, table, header=False).encode("utf-8"))
             self.done.append((table, entry, text, size))     # one statement: the step is written
@@ -105,12 +104,7 @@ class RunWriter:
         return start + len(data)
 
     def _summary(self, walk, status: str | None = None) -> dict:
-        tables = [d[0] for d in self.done]
-        speed = None
-        if tables:
-            first, last = tables[0], tables[-1]
-            if last["t"][-1] > first["t"][0]:
-                speed = 3.6 * (last["hip_x"][-1] - first["hip_x"][0]) / (last["t"][-1] - first["t"][0])
+        speed = mean_hip_speed_kmh(self.done[0][0], self.done[-1][0]) if self.done else None
         summary = summary_of(walk, [d[1] for d in self.done], speed)
         if status is not None:
             summary["status"] = status
@@ -123,12 +117,11 @@ class RunWriter:
             return {c: np.array([], dtype=str if c == "subphase" else float) for c in COLUMNS}
         return {c: np.concatenate([d[0][c] for d in self.done]) for c in COLUMNS}
 
-    def finish(self, walk, plots: bool = False, animation: bool = False, body: bool = True):
+    def finish(self, walk, body: bool = True):
         """Write the rest of the run: any step not written yet, the final summary and events
-        (durably), with ``body`` angles.csv, walk.bvh and walk.mot, with ``plots`` the plots and
-        with ``animation`` walk.gif (for a walk with at least one step). Returns the paths by name
-        and the drawing times ``{"plots": s, "animation": s}`` (None for what was not drawn) and
-        the RunData of the walk."""
+        (durably), with ``body`` angles.csv, walk.bvh and walk.mot. Returns the paths by name and
+        the RunData of the walk (the plots and walk.gif are drawn from it:
+        :func:`klaw_ocp.io.render_pool.render_outputs`)."""
         from .run_data import RunData
         self._catch_up(walk)
         path = self.folder / DYNAMICS_FILE
@@ -147,17 +140,4 @@ class RunWriter:
             RunData(name=walk.spec.name, summary=summary, table=table)
         if body:
             paths.update(write_rendered(render_body(run), self.folder))
-        times = {"plots": None, "animation": None}
-        if plots and walk.steps:
-            t0 = time.perf_counter()
-            from .plots import render_plots
-            paths.update(write_rendered(render_plots(run), self.folder / PLOTS_DIR))
-            times["plots"] = time.perf_counter() - t0
-        if animation and walk.steps:
-            t0 = time.perf_counter()
-            from .animation import write_animation
-            gif = write_animation(run, self.folder / GIF_FILE)
-            if gif is not None:
-                paths["animation"] = gif
-                times["animation"] = time.perf_counter() - t0
-        return paths, times, run
+        return paths, run

@@ -126,7 +126,7 @@ class FlatFoot:
 
 
 #: the points of :class:`FootPieces`, in its order
-HEEL, ANKLE, METATARSAL = slice(0, 1), slice(1, 2), slice(2, 3)
+ANKLE = slice(1, 2)          # the ankle row of the foot pieces (heel, ankle, metatarsal head)
 
 
 @dataclass(frozen=True)

@@ -58,26 +58,22 @@ class _Grids:
         return np.maximum(left, right)
 
 
-def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
-    """:func:`rate_limited_turn` of every step at once."""
-    turn = np.zeros(len(grids.t))
-    ends = rate * np.minimum(grids.since, grids.duration - grids.since)
-    slope = rate * grids.since
-    for sign in (1.0, -1.0):
-        turn += sign * np.minimum(grids.envelope(np.maximum(sign * required, 0.0), slope), ends)
-    return turn
-
-
-def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE):
+def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE, capped_at_ends=False):
     """The least function at least ``required`` where that is positive and at most it where
     negative that changes by at most ``rate``, on every step's grid: max_j(part_j - rate |t_i -
-    t_j|) for each sign's part (:meth:`_Grids.envelope`), without the ends' caps of
-    :func:`rate_limited_turn`."""
+    t_j|) for each sign's part (:meth:`_Grids.envelope`); ``capped_at_ends``: also 0 at each
+    grid's ends, rising from them at ``rate`` (:func:`rate_limited_turn`)."""
     out = np.zeros(len(grids.t))
     slope = rate * grids.since
+    ends = rate * np.minimum(grids.since, grids.duration - grids.since) if capped_at_ends else np.inf
     for sign in (1.0, -1.0):
-        out += sign * grids.envelope(np.maximum(sign * required, 0.0), slope)
+        out += sign * np.minimum(grids.envelope(np.maximum(sign * required, 0.0), slope), ends)
     return out
+
+
+def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
+    """:func:`rate_limited_turn` of every step at once."""
+    return _cone_envelope(grids, required, rate, capped_at_ends=True)
 
 
 def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):

@@ -30,7 +30,7 @@ Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -91,8 +91,6 @@ class StanceFoot:
     #: the heel does not come down again once it is off
     single_t: tuple = ()
     single_pitch: tuple = ()
-    #: :meth:`pitch_at_other_heel_strike` by hip: the step asks for it twice (toe-off, double support)
-    _start_pitches: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float,
@@ -228,16 +226,16 @@ class StanceFoot:
 
     def pitch_at_other_heel_strike(self, hip: np.ndarray) -> float:
         """Where single support leaves the foot's pitch when the other leg strikes (>= 0)."""
-        key = tuple(np.asarray(hip, float).ravel())
-        if key not in self._start_pitches:
-            before = np.array([self.t_step - 1e-12])
-            self._start_pitches[key] = max(float(self.pitch(before, np.atleast_2d(hip))[0]), 0.0)
-        return self._start_pitches[key]
+        before = np.array([self.t_step - 1e-12])
+        return max(float(self.pitch(before, np.atleast_2d(hip))[0]), 0.0)
 
-    def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float) -> "StanceFoot":
-        """The rules of the double support: the pitch starts where single support left it and runs
-        to ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
-        start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
+    def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float,
+                            start: float | None = None) -> "StanceFoot":
+        """The rules of the double support: the pitch starts where single support left it
+        (``start``, when the caller has :meth:`pitch_at_other_heel_strike` already) and runs to
+        ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
+        if start is None:
+            start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
         # does not: its heel rising at once keeps the leg from straightening as the hip moves away
         reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
