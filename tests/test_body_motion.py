@@ -18,7 +18,7 @@ from klaw_ocp.dynamics.kinematics import foot_points_arrays, foot_points_float
 from klaw_ocp.gait import LocomotionAttributes
 from klaw_ocp.io.run_data import RunData
 from klaw_ocp.io.writers import angles_csv
-from klaw_ocp.kinematics.body_motion import ANGLES_COLUMNS, body_motion, swing_hips, toe_off_ankles
+from klaw_ocp.kinematics.body_motion import ANGLES_COLUMNS, body_motion, swing_hips, toe_off_feet
 from klaw_ocp.kinematics.leg_geometry import leg_ik
 from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, forward_kinematics
 from klaw_ocp.kinematics.stance_legs import stance_frames
@@ -310,21 +310,29 @@ def test_a_foot_that_stood_still_starts_its_push_off_from_rest():
     assert pitch[2] == pytest.approx(0.6 * 0.15 / 0.2)              # the line itself once eased in
 
 
-def test_the_body_swing_knee_is_the_dynamic_knee_after_the_toe_off_blend(short_walk):
+def test_the_body_swing_knee_is_the_dynamic_knee_between_the_toe_off_and_landing_blends(short_walk):
     """kinematics/swing_legs.py: the swing leg hangs from its own hip in its plane with the
     dynamics' hip-to-ankle distance, so its knee is the dynamic θ4 once the blend out of the
-    virtual leg's toe-off posture is over (no lift in this walk: the turned foot clears); before
-    that it starts from the virtual leg's toe-off ankle."""
+    virtual leg's toe-off posture is over and until swing3, where it blends into the next stance's
+    landing (no lift in this walk: the turned foot clears); it starts from the virtual leg's
+    toe-off ankle and lands on the next stance's heel-strike ankle, its heel on the planned point."""
     walk, body = short_walk, short_walk.spec.body
     hips_at = swing_hips(walk, lambda t: np.zeros((len(t), 3)))
-    start = toe_off_ankles(walk, hips_at)
+    feet = toe_off_feet(walk, hips_at)
+    start = feet[0]
     for k, step in enumerate(walk.steps):
         foot = step.swing_foot
         after = foot.t_toe_off + TOE_OFF_BLEND * (foot.t1 - foot.t_toe_off)
-        tau = np.r_[foot.t_toe_off, np.linspace(after, foot.t_heel_strike, 50)]
+        tau = np.r_[foot.t_toe_off, np.linspace(after, foot.t2, 50), foot.t_heel_strike]
         steps = np.full(len(tau), k)
-        leg = swing_legs(walk, steps, tau, hips_at, start)
+        leg = swing_legs(walk, steps, tau, hips_at, feet)
         _, knee, _ = leg_ik(body, leg["hip"], leg["ankle"])
         # 1e-7: at the straight knee of swing3 a round-off of the distance is 1e-8 rad of knee
-        assert knee[1:] == pytest.approx(swing_curves(walk)(steps[1:], tau[1:])[:, 1], abs=1e-7), k
+        assert knee[1:-1] == pytest.approx(swing_curves(walk)(steps[1:-1], tau[1:-1])[:, 1], abs=1e-7), k
+        if k + 1 < len(walk.steps):
+            lands = walk.steps[k + 1].stance_foot
+            at_strike = lands.frames(np.array([0.0]), leg["hip"][-1:])
+            assert leg["ankle"][-1] == pytest.approx(at_strike.ankle[0], abs=1e-9), k
+            assert leg["heel"][-1] == pytest.approx([lands.foot.ankle_x - body.l8, 0.0], abs=1e-9), k
+            assert leg["toe"][-1] == pytest.approx(at_strike.toe[0], abs=1e-9), k
         assert leg["ankle"][0] == pytest.approx(start[k], abs=1e-12), k

@@ -85,18 +85,22 @@ def test_the_angles_are_the_foot_models_angles(legs):
 
 
 def test_heel_strike_and_heel_off_follow_the_attributes(legs):
-    """The leg lands straight on its heel with the foot at θ5 = theta5_impact; the heel comes off
-    where θ5 reaches heel_off_theta5 (or the flat foot is out of reach); meta-off where θ6 reaches
-    meta_off_theta6, which it then keeps."""
+    """The leg lands on its heel, straight with the foot at θ5 = theta5_impact where the straight
+    leg manages the hip's approach, else with the knee flexed by the landing's least angle
+    (kinematics/landing.py; at 8 km/h); the heel comes off where θ5 reaches heel_off_theta5 (or
+    the flat foot is out of reach); meta-off where θ6 reaches meta_off_theta6, which it then keeps."""
     walk, frames = legs
     attrs = walk.spec.attributes
-    for f in frames:
+    feet = [step.stance_foot for step in walk.steps if step.stance_leg_frames() is not None]
+    for foot, f in zip(feet, frames):
         if f.pitch[0] == 0:
             continue      # a start from rest: the foot stands flat
-        assert f.theta4[0] == pytest.approx(0.0, abs=1e-6)
-        # eq. 3 built the landing with Table B-1's l11; the foot's heel-ankle is sqrt(l8² + l9²),
-        # equal to its 4 digits: 0.011° at 1.8 m
-        assert math.degrees(f.theta5[0]) == pytest.approx(attrs.theta5_impact, abs=0.02)
+        assert f.theta4[0] == pytest.approx(foot.landing_knee, abs=1e-6)
+        assert f.heel[0] == pytest.approx([foot.foot.ankle_x - walk.spec.body.l8, 0.0], abs=1e-12)
+        if foot.landing_knee == 0:
+            # eq. 3 built the landing with Table B-1's l11; the foot's heel-ankle is sqrt(l8² + l9²),
+            # equal to its 4 digits: 0.011° at 1.8 m
+            assert math.degrees(f.theta5[0]) == pytest.approx(attrs.theta5_impact, abs=0.02)
         flat = (f.period == NORMAL) & (f.pitch == 0)
         assert np.all(np.degrees(f.theta5[flat]) <= attrs.heel_off_theta5 + 1e-6)
         meta = f.period == META_OFF

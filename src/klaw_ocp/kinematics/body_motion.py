@@ -23,6 +23,7 @@ import numpy as np
 from ..results import stance_leg
 from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
 from .skeleton import ANGLE_NAMES, SIDES
+from .leg_geometry import leg_ik
 from .stance_legs import stance_frames
 from .swing_legs import swing_legs
 from .upper_body import StepWindow, lateral_displacement, upper_body_motion
@@ -161,13 +162,15 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
     legs = stance_frames([foot for _, foot in feet], which, np.concatenate(t_leg),
                          np.vstack([hips[side][r] for side, r in zip(sides, rows)]))
     pull = _overreach_pull(legs)
+    # the knee of a leg whose foot hangs from it: the inverse kinematics of the foot's ankle
+    knee = np.where(legs.overreach[:, None] > 0, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee)
     points = {side: {name: np.full((n, 2), np.nan) for name in _POINTS} for _, side in SIDES}
     covered = {side: np.zeros(n, bool) for _, side in SIDES}
     start = 0
     for (k, _), side, r in zip(feet, sides, rows):
         mine = slice(start, start + len(r))
         for name in _POINTS:
-            points[side][name][r] = getattr(legs, name)[mine] + (pull[mine] if name in _FOOT else 0.0)
+            points[side][name][r] = (knee if name == "knee" else getattr(legs, name))[mine] + (pull[mine] if name in _FOOT else 0.0)
         covered[side][r] = True
         start += len(r)
     return points, covered
@@ -183,14 +186,15 @@ def _overreach_pull(legs) -> np.ndarray:
     return toward_hip * (legs.overreach / np.maximum(np.hypot(*toward_hip.T), 1e-12))[:, None]
 
 
-def toe_off_ankles(walk, hips_at) -> np.ndarray:
-    """(steps, 2): each step's hind leg's ankle at its toe-off as the body shows it, its virtual
-    leg on the leg's own hip in its plane (the swing leg of the step starts from it)."""
+def toe_off_feet(walk, hips_at) -> tuple[np.ndarray, np.ndarray]:
+    """Each step's hind leg at its toe-off as the body shows it, its virtual leg on the leg's own
+    hip in its plane (the swing leg of the step starts from it): the ankle (steps, 2) and the
+    foot's pitch (steps,)."""
     feet = [s.hind_foot for s in walk.steps]
     every = np.arange(len(feet))
     _, own = hips_at(every, np.array([s.plan.timings.t_ds for s in walk.steps]))
     legs = stance_frames(feet, every, np.array([f.t_toe_off for f in feet]), own)
-    return legs.ankle + _overreach_pull(legs)
+    return legs.ankle + _overreach_pull(legs), legs.pitch
 
 
 def swing_hips(walk, pelvis_at, pieces: WalkPieces | None = None):
@@ -233,7 +237,7 @@ def body_motion(walk, fps: float) -> BodyMotion:
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
     hips_at = swing_hips(walk, pelvis_at, pieces)
-    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_ankles(walk, hips_at))
+    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_feet(walk, hips_at))
     frames, start, legs = slice(None), 0, {}
     for side, r in swinging.items():
         for name in _POINTS:

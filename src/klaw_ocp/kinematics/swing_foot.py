@@ -10,8 +10,9 @@ The interpolation, our choice (the text says only "interpolated"), shaped after 
 people, who dorsiflex quickly after toe-off, hold the foot up while it passes under the body and
 are back at neutral before the heel lands:
 
-- θ5 (ankle): from its toe-off value to ``theta5_t1`` over the first half of swing1, fast at first
-  (an ease-out: the toe lifts from the ground at once), held to t1; ``theta5_t1`` is the heel-strike
+- θ5 (ankle): from its toe-off value to ``theta5_t1`` over the first half of swing1 (a
+  smoothstep: it leaves the push-off's nearly still ankle without a jump in rate; an ease-out,
+  fastest at toe-off, turned the steep foot of long steps by 2.3° in the first 2 ms), held to t1; ``theta5_t1`` is the heel-strike
   attribute, dorsiflexed further where the toe under the knee at t1 needs it
   (:func:`klaw_ocp.control.curve_p.swing1_end_posture`), through swing2 (the toe stays up
   while the knee extends: the paper's recovery loop keeps it ``toe_clearance`` up); then to the
@@ -52,10 +53,10 @@ def schedule_angles(t, s: dict, clip):
     lift = clip((t - s["t_toe_off"]) / (ANKLE_LIFT_FRACTION * (s["t1"] - s["t_toe_off"])), 0.0, 1.0)
     swing1 = clip((t - s["t_toe_off"]) / (s["t1"] - s["t_toe_off"]), 0.0, 1.0)
     swing3 = clip((t - s["t2"]) / (s["t_heel_strike"] - s["t2"]), 0.0, 1.0)
-    ease_out = lift * (2 - lift)
+    smooth_lift = lift * lift * (3 - 2 * lift)
     smooth3 = swing3 * swing3 * (3 - 2 * swing3)
     smooth1 = swing1 * swing1 * (3 - 2 * swing1)
-    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * ease_out
+    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * smooth_lift
               + (s["theta5_heel_strike"] - s["theta5_t1"]) * smooth3)
     theta6 = s["theta6_toe_off"] + (s["theta6_heel_strike"] - s["theta6_toe_off"]) * smooth1
     return theta5, theta6
@@ -91,7 +92,11 @@ def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.n
         centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
         half = np.arccos(_clip(-ankle_y / radius, -1.0, 1.0))
         fits &= np.abs(math.pi - centre) <= half
-        lower, upper = np.maximum(lower, centre - half), np.minimum(upper, centre + half)
+        # a point nearer the ankle than the ankle's height is above the ground at every angle:
+        # no limit (its arc's edges, π either side, are where it points straight down)
+        free = ankle_y >= radius
+        lower = np.where(free, lower, np.maximum(lower, centre - half))
+        upper = np.where(free, upper, np.minimum(upper, centre + half))
     to_theta5 = shank - math.pi / 2
     level = math.pi + to_theta5
     return np.where(fits, _clip(theta5, lower + to_theta5, upper + to_theta5), level), theta6

@@ -40,43 +40,76 @@ def _model_leg(body, swing, step, tau, simulated_hip):
     return shank, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
 
 
-def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off_offset):
+def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, landing):
     """The body's swing leg before the foot's lift at samples of steps ``step`` and times ``tau``:
-    (the dynamic shank angle θ3 + θ4, the ankle (n, 2) in the leg's plane). ``toe_off_offset``
-    (steps, 2): the body's virtual-leg ankle at each step's toe-off less the model's."""
+    (the shank angle the scheduled foot is set on, the ankle (n, 2) in the leg's plane).
+    ``toe_off`` and ``landing``: :func:`_end_offsets` at each step's toe-off and heel strike, blended
+    out over the first TOE_OFF_BLEND of swing1 and in over swing3."""
     shank, ankle = _model_leg(body, swing, step, tau, simulated_hip)
     dynamic = np.hypot(*(ankle - simulated_hip).T)
     feet = [s.swing_foot for s in walk.steps]
-    t_to = np.array([f.t_toe_off for f in feet])[step]
-    t1 = np.array([f.t1 for f in feet])[step]
-    virtual = 1 - smoothstep(np.clip((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)), 0.0, 1.0))
-    towards = ankle + virtual[:, None] * toe_off_offset[step] - own_hip
+    t_to, t1, t2, t_hs = (np.array([getattr(f, name) for f in feet])[step]
+                          for name in ("t_toe_off", "t1", "t2", "t_heel_strike"))
+    leaves = 1 - smoothstep(np.clip((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)), 0.0, 1.0))
+    lands = smoothstep(np.clip((tau - t2) / np.maximum(t_hs - t2, 1e-12), 0.0, 1.0))
+    towards = ankle + leaves[:, None] * toe_off[0][step] + lands[:, None] * landing[0][step] - own_hip
     reached = np.hypot(*towards.T)
-    distance = dynamic + virtual * (reached - dynamic)
-    return shank, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
+    distance = dynamic + np.maximum(leaves, lands) * (reached - dynamic)
+    turn = leaves * toe_off[1][step] + lands * landing[1][step]
+    return shank + turn, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
 
 
-def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_ankles: np.ndarray) -> dict:
+def _end_offsets(walk, swing, hips_at, steps, t, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
+    """How the body's swing leg differs from the model's where it meets a virtual leg, at times
+    ``t`` of the steps ``steps`` (indices): the virtual leg's ankles (k, 2) and foot pitches (k,)
+    there against the model's ankle and scheduled foot. Returns (the ankle offsets (all steps, 2),
+    the turns (rad, all steps) of the shank the scheduled foot is set on that give the virtual
+    foot's pitch); zero for the steps not given."""
+    body = walk.spec.body
+    ankle_offset, shank_offset = np.zeros((len(walk.steps), 2)), np.zeros(len(walk.steps))
+    if len(steps):
+        model_shank, model_ankle = _model_leg(body, swing, steps, t, hips_at(steps, t)[0])
+        theta5 = np.array([walk.steps[k].swing_foot.angles(np.array([tk]))[0][0] for k, tk in zip(steps, t)])
+        ankle_offset[steps] = ankles - model_ankle
+        # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
+        shank_offset[steps] = (theta5 - np.pi / 2 + pitches) - model_shank
+    return ankle_offset, shank_offset
+
+
+def _landings(walk, swing, hips_at) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_end_offsets` at each step's heel strike: the swing leg lands as the next stance's
+    virtual leg starts (:mod:`.landing`: its knee may be flexed, its foot then a little more toe-up
+    about the same heel point). The walk's last step has no next stance."""
+    steps = walk.steps
+    lands = [s.stance_foot for s in steps[1:]]
+    ankles = np.vstack([f.foot.ankle_at([f.rocker_pitch], f.meta_off_theta6) for f in lands]) if lands else np.zeros((0, 2))
+    return _end_offsets(walk, swing, hips_at, np.arange(len(lands)),
+                        np.array([s.swing_foot.t_heel_strike for s in steps[:-1]]), ankles,
+                        np.array([f.rocker_pitch for f in lands]))
+
+
+def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet) -> dict:
     """The swing leg in its plane at samples of steps ``step`` (n,) and step-local times ``tau``
     (n,), all after their step's toe-off: its points (n, 2), "hip" .. "toe".
     ``hips_at(step, tau)`` gives the simulated hip and the swinging leg's own hip in its plane,
     (n, 2) each, at any such samples (the frames', and each step's guard grid);
-    ``toe_off_ankles`` (steps, 2) the ankle of each step's virtual leg at its toe-off as the body
-    shows it, which the swing leg starts from."""
+    ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
+    at its toe-off as the body shows it (:func:`.body_motion.toe_off_feet`), which the swing leg
+    starts from."""
     body, steps = walk.spec.body, walk.steps
     swing = swing_curves(walk)
     every = np.arange(len(steps))
-    t_to = np.array([s.swing_foot.t_toe_off for s in steps])
-    offset = toe_off_ankles - _model_leg(body, swing, every, t_to, hips_at(every, t_to)[0])[1]
+    toe_off = _end_offsets(walk, swing, hips_at, every, np.array([s.swing_foot.t_toe_off for s in steps]), *toe_off_feet)
+    landing = _landings(walk, swing, hips_at)
     simulated, own = hips_at(step, tau)
-    shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, offset)
+    shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, toe_off, landing)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
     swinging, counts = np.unique(step, return_counts=True)
     grids = [steps[k].swing_foot.guard_grid() for k in swinging]
     grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
     grid_simulated, grid_own = hips_at(grid_step, grid_t)
-    grid_shank, grid_ankle = _body_leg(body, walk, swing, grid_step, grid_t, grid_simulated, grid_own, offset)
+    grid_shank, grid_ankle = _body_leg(body, walk, swing, grid_step, grid_t, grid_simulated, grid_own, toe_off, landing)
     order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
     theta5, theta6, lift = np.empty(len(tau)), np.empty(len(tau)), np.empty(len(tau))
     theta5[order], theta6[order], lift[order] = lifted_feet(

@@ -36,11 +36,14 @@ import numpy as np
 
 from ..body import Body
 from . import heel_up_roots
-from .leg_geometry import FlatFoot, ankle_angle, leg_ik, smoothstep
+from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
+from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion, smoothstep
 
 #: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
 #: flexion): a fully straight knee is a singular point of the inverse kinematics.
 REACH_FRACTION = 1 - 1e-3
+#: the least time (s) over which the heel's rise from the ground is a straight line in the pitch
+HEEL_OFF_CHORD = 0.02
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
 _PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch > meta-off)
 
@@ -61,7 +64,8 @@ class VirtualLegFrames:
     theta6: np.ndarray
     pitch: np.ndarray
     period: np.ndarray
-    #: how far the hip was beyond the straight leg's reach (m; 0 when the leg reached)
+    #: how far the hip was beyond the leg's reach (m; 0 when the leg reached): l1, or l1 ·
+    #: REACH_FRACTION where the foot stands at MAX_PITCH and can rise no further
     overreach: np.ndarray
 
 
@@ -91,39 +95,35 @@ class StanceFoot:
     #: the heel does not come down again once it is off
     single_t: tuple = ()
     single_pitch: tuple = ()
+    #: the knee flexion at heel strike (rad; 0: the leg lands straight): see :mod:`.landing`
+    landing_knee: float = 0.0
 
     @classmethod
     def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float,
                        hip_velocity=(0.0, 0.0)) -> "StanceFoot":
-        """The foot lands on its heel at (ankle_x - l8, 0) with the leg straight: its ankle is l1
+        """The foot lands on its heel at (ankle_x - l8, 0) with the knee flexed by the least angle
+        :mod:`.landing` allows (straight where the leg manages): its ankle is the leg's reach
         from the hip and the heel-ankle distance from the heel, which fixes the heel-strike pitch.
 
-        The foot then comes down as fast as the hip (``hip_velocity``, m/s) approaches it, so that
-        the hip-ankle distance starts still: with the leg straight at heel strike, any shortening
-        rate would bend the knee as the square root of time, an infinite knee rate (23° in the
-        first frame at 30 fps)."""
-        # in plain floats: numpy's overhead on two-vectors is most of the cost
-        heel_x, ankle0_x, ankle0_y = ankle_x - body.l8, ankle_x, body.l9
-        hip_x, hip_y = (float(v) for v in hip)
-        r_heel = math.hypot(ankle0_x - heel_x, ankle0_y)
-        to_x, to_y = hip_x - heel_x, hip_y
-        dist = math.hypot(to_x, to_y)
-        # the circles |A - hip| = l1 and |A - heel| = r_heel: the intersection ahead of the heel
-        along = (dist ** 2 + r_heel ** 2 - body.l1 ** 2) / (2 * dist)
-        across = math.sqrt(max(r_heel ** 2 - along ** 2, 0.0))
-        e_x, e_y = to_x / dist, to_y / dist
-        land_x, land_y = heel_x + along * e_x + across * e_y, along * e_y - across * e_x
-        sole_up = math.atan2(land_y, land_x - heel_x) - math.atan2(ankle0_y, ankle0_x - heel_x)
+        The foot then comes down about the heel. With the leg straight it starts as fast as the hip
+        (``hip_velocity``, m/s) approaches it, so that the hip-ankle distance starts still: any
+        shortening rate would bend the straight knee as the square root of time, an infinite knee
+        rate (23° in the first frame at 30 fps). With the knee flexed it starts at most
+        LANDING_FOOT_RATE, and the knee takes the rest of the approach."""
         t_flat = attrs.foot_flat_fraction * 2 * t_step
-        # d|hip - ankle|/dt = e.(v_hip - dA/dp p') = 0, the ankle A turning clockwise about the heel
-        # as the pitch p rises: dA/dp = ((A - heel)_y, -(A - heel)_x)
-        e_x, e_y = (hip_x - land_x) / body.l1, (hip_y - land_y) / body.l1
-        along = e_x * land_y + e_y * (heel_x - land_x)
-        v_x, v_y = (float(v) for v in hip_velocity)
-        rate = (e_x * v_x + e_y * v_y) / along if abs(along) > 1e-12 else 0.0
-        return cls(FlatFoot(body, ankle_x), -sole_up, math.radians(attrs.theta6_impact), t_flat,
-                   math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
-                   rocker_rate=max(rate, 0.0))
+        straight_pitch, straight_rate = landing_pitch(body, ankle_x, hip, body.l1, hip_velocity)
+
+        def landing(knee: float, rate: float | None) -> "StanceFoot":
+            if knee == 0:
+                pitch, still = straight_pitch, straight_rate
+            else:
+                pitch, still = landing_pitch(body, ankle_x, hip, float(reach_for_knee_flexion(body, knee)), hip_velocity)
+                still = min(still, LANDING_FOOT_RATE)
+            rate = still if rate is None else rate
+            return cls(FlatFoot(body, ankle_x), pitch, math.radians(attrs.theta6_impact), t_flat,
+                       math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
+                       rocker_rate=rate, landing_knee=knee)
+        return least_landing_knee(landing, hip, hip_velocity, usable=straight_pitch < 0 and t_flat > 0)
 
     @classmethod
     def standing(cls, body: Body, attrs, ankle_x: float, t_step: float) -> "StanceFoot":
@@ -209,10 +209,17 @@ class StanceFoot:
                                      self.reach_pitch(hips[after], fraction[after]))
         held = np.maximum.accumulate(rule)
         # the heel leaves the ground at ``first``: the held pitch rises from 0 there, not along the
-        # line between the nodes around it (which would lift the heel by a jump)
-        single_t = np.r_[t[~after], first, t[after]]
+        # line between the nodes around it (which would lift the heel by a jump). It rises along a
+        # chord of at least HEEL_OFF_CHORD: the ankle-limit pitch grows as the square root of the
+        # time since heel-off where θ5 is stationary in the pitch (the knee then snaps, 2.2° in
+        # 2 ms at 7 km/h); under the chord the ankle passes its limit by a fraction of a degree
+        # for those milliseconds, and the reach still holds the leg (:func:`rule_pitch`).
+        chord = after & (t < first + HEEL_OFF_CHORD)
+        chord[np.flatnonzero(after)[-1:]] = False     # the last node stays, whatever its distance
+        kept = after & ~chord
+        single_t = np.r_[t[~after], first, t[kept]]
         return replace(self, t_heel_off=first, single_t=tuple(single_t),
-                       single_pitch=tuple(np.r_[held[~after], 0.0, held[after]]))
+                       single_pitch=tuple(np.r_[held[~after], 0.0, held[kept]]))
 
     @property
     def starts_standing(self) -> bool:
@@ -326,9 +333,12 @@ def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> V
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
     period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q)]
+    # where the foot can rise no further, the leg keeps the reach of the rules it was held to
+    # (REACH_FRACTION), so its knee does not snap straight as the hip moves out of reach
+    limit = body.l1 * np.where(pitch >= heel_up_roots.MAX_PITCH, REACH_FRACTION, 1.0)
     return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
                             th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
-                            np.maximum(reach - body.l1, 0.0))
+                            np.maximum(reach - limit, 0.0))
 
 
 #: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at

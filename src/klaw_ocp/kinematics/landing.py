@@ -1,0 +1,115 @@
+"""How the virtual leg lands (§4.2's "normal" period at its start): the foot's pitch and the knee at
+heel strike, and how fast the foot then comes down about the heel.
+
+The paper's telescopic stance leg is longer than the human leg at heel strike (the foot lands
+toe-up, which brings the ankle nearer the hip) and it shortens at once: the hip approaches the
+planted foot at 0.9 m/s in the natural walk, 1.5 m/s in steps of 1.05 m, 1.8 m/s at 8 km/h. A
+straight human leg follows that only by the foot turning about the heel, as fast as
+c / lever, with a lever (the heel-ankle arm across the leg) of about 5 cm: 1000-2000°/s, 2-4° a
+frame at 500 fps; any slower and the straight knee bends as the square root of time. People land
+with the knee a little flexed and keep flexing it through loading response; so does the body. It
+lands with the least knee flexion (0, then LANDING_KNEE_STEP apart, up to LANDING_KNEE_MAX) at
+which the hip's approach is shared between the foot, turning at most LANDING_FOOT_RATE, and the
+knee, so that thigh, knee and ankle start at most LANDING_JOINT_RATE. Where the straight leg
+already manages (the natural walk, slower walks) it lands straight, as before.
+
+A bent knee brings the ankle nearer the hip, so the foot lands a little more toe-up about the same
+heel point (the planned one): the swing leg bends into that posture over the end of its swing
+(:mod:`.swing_legs`). The dynamics are unchanged: their swing leg lands straight, and the stance
+leg's hip is the simulated one throughout.
+
+Frames: world x forward, y up, ground y = 0; pitch clockwise (heel-up), negative toe-up.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: the fastest thigh, knee and ankle may start after heel strike (rad/s): 1.8° a frame at 500 fps
+LANDING_JOINT_RATE = math.radians(900)
+#: the fastest the foot's pitch may start where the knee lands bent (rad/s). The pitch is not a
+#: joint angle: with the knee flexing, the shank turns the same way and the ankle angle changes
+#: by their difference.
+LANDING_FOOT_RATE = math.radians(1600)
+#: the knee flexions at heel strike tried, least first (rad)
+LANDING_KNEE_STEP = math.radians(0.5)
+LANDING_KNEE_MAX = math.radians(20.0)
+#: the time step over which the starting rates are measured (s)
+_RATE_STEP = 1e-4
+
+
+def landing_pitch(body, ankle_x: float, hip, reach: float, hip_velocity) -> tuple[float, float]:
+    """The pitch (rad, < 0: toe-up) at which the foot, its heel on the ground at ankle_x - l8, has
+    its ankle ``reach`` from the hip, and the pitch rate (rad/s) at which the hip-ankle distance
+    starts still with the hip moving at ``hip_velocity``: the heel-rocker rate the straight leg
+    needs (the ankle turning clockwise about the heel as the pitch rises)."""
+    # in plain floats: numpy's overhead on two-vectors is most of the cost
+    heel_x, ankle0_x, ankle0_y = ankle_x - body.l8, ankle_x, body.l9
+    hip_x, hip_y = (float(v) for v in hip)
+    r_heel = math.hypot(ankle0_x - heel_x, ankle0_y)
+    to_x, to_y = hip_x - heel_x, hip_y
+    dist = math.hypot(to_x, to_y)
+    # the circles |A - hip| = reach and |A - heel| = r_heel: the intersection ahead of the heel
+    along = (dist ** 2 + r_heel ** 2 - reach ** 2) / (2 * dist)
+    across = math.sqrt(max(r_heel ** 2 - along ** 2, 0.0))
+    e_x, e_y = to_x / dist, to_y / dist
+    land_x, land_y = heel_x + along * e_x + across * e_y, along * e_y - across * e_x
+    sole_up = math.atan2(land_y, land_x - heel_x) - math.atan2(ankle0_y, ankle0_x - heel_x)
+    # d|hip - ankle|/dt = e.(v_hip - dA/dp p') = 0, dA/dp = ((A - heel)_y, -(A - heel)_x)
+    e_x, e_y = (hip_x - land_x) / reach, (hip_y - land_y) / reach
+    along = e_x * land_y + e_y * (heel_x - land_x)
+    v_x, v_y = (float(v) for v in hip_velocity)
+    rate = (e_x * v_x + e_y * v_y) / along if abs(along) > 1e-12 else 0.0
+    return -sole_up, max(rate, 0.0)
+
+
+def starting_rates(foot, hip, hip_velocity) -> np.ndarray:
+    """The thigh's, the knee's and the ankle's rates (rad/s: θ3, θ4, θ5) as the stance foot
+    ``foot`` (a :class:`.virtual_leg.StanceFoot`) starts, the hip moving at ``hip_velocity``."""
+    t = np.array([0.0, _RATE_STEP])
+    hips = np.asarray(hip, float) + t[:, None] * np.asarray(hip_velocity, float)
+    legs = foot.frames(t, hips)
+    return np.array([legs.theta3[1] - legs.theta3[0], legs.theta4[1] - legs.theta4[0],
+                     legs.theta5[1] - legs.theta5[0]]) / _RATE_STEP
+
+
+def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> tuple[float, float]:
+    """The rate r in [0, most] that makes the largest of |at_zero + slope r| least, and that least
+    largest value. The joints' starting rates are linear in the foot's (their velocities are linear
+    in the hip's and the foot's), so the optimum is an end of the range or where two of the lines
+    |a_i + b_i r| cross."""
+    candidates = [0.0, most]
+    for i in range(len(at_zero)):
+        for j in range(len(at_zero)):
+            for sign in (1.0, -1.0):      # a_i + b_i r = ±(a_j + b_j r), and each line's own zero
+                denominator = slope[i] - sign * slope[j]
+                if abs(denominator) > 1e-12:
+                    candidates.append((sign * at_zero[j] - at_zero[i]) / denominator)
+    r = np.clip(np.array(candidates), 0.0, most)
+    largest = np.max(np.abs(at_zero[:, None] + slope[:, None] * r[None, :]), axis=0)
+    best = int(np.argmin(largest))
+    return float(r[best]), float(largest[best])
+
+
+def least_landing_knee(make_foot, hip, hip_velocity, usable: bool = True):
+    """The stance foot of the least knee flexion at heel strike tried whose thigh, knee and ankle
+    start at most LANDING_JOINT_RATE; the most flexed one tried if none does. ``make_foot(knee,
+    rate)`` builds the foot landing with that knee flexion (rad), its pitch starting at ``rate``
+    (rad/s; None: the rate that keeps the hip-ankle distance still, capped at LANDING_FOOT_RATE
+    for a bent knee), and has that rate as ``rocker_rate``. A straight leg must start at the
+    rate that holds its length; a bent one starts at the rate, at most that one, that keeps the
+    largest joint rate least. ``usable`` False (no rocker to measure) takes the straight leg."""
+    straight = make_foot(0.0, None)
+    if not usable or np.max(np.abs(starting_rates(straight, hip, hip_velocity))) <= LANDING_JOINT_RATE:
+        return straight
+    n = int(round(LANDING_KNEE_MAX / LANDING_KNEE_STEP))
+    for k in range(1, n + 1):
+        knee = k * LANDING_KNEE_STEP
+        capped = make_foot(knee, None)
+        most = capped.rocker_rate
+        at_zero = starting_rates(make_foot(knee, 0.0), hip, hip_velocity)
+        slope = (starting_rates(capped, hip, hip_velocity) - at_zero) / most if most > 0 else np.zeros(3)
+        rate, largest = _least_largest(at_zero, slope, most)
+        if largest <= LANDING_JOINT_RATE or k == n:
+            return make_foot(knee, rate)
