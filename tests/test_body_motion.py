@@ -86,6 +86,18 @@ def test_no_angle_moves_more_than_2_degrees_between_frames_at_500_fps(walked):
     assert steps.max() < MAX_FRAME_STEP_DEG, (ANGLE_NAMES[worst[1]], table["time"][worst[0]], steps.max())
 
 
+@pytest.mark.parametrize("name", ["long_steps", "short_steps"])
+def test_no_angle_moves_more_than_2_degrees_between_frames_in_the_extreme_steps(name):
+    """configs/long_steps.yaml (the hip beyond the trailing leg's reach before toe-off, its foot at
+    MAX_PITCH) and configs/short_steps.yaml (a double support of 17 ms; the push-off begins in
+    single support): at 500 fps, no angle moves by 2° or more between frames."""
+    walk = simulate_walk(ROOT / "configs" / f"{name}.yaml", method="multiple-shooting")
+    angles = np.degrees(body_motion(walk, FPS).angles)
+    steps = np.abs(np.diff(angles, axis=0))
+    worst = np.unravel_index(np.argmax(steps), steps.shape)
+    assert steps.max() < MAX_FRAME_STEP_DEG, (ANGLE_NAMES[worst[1]], worst[0] / FPS, steps.max())
+
+
 # -- the skeleton of angles.csv --------------------------------------------------------------
 def test_stance_feet_stay_planted_on_their_centrelines(walked):
     """Heel while the foot turns about it and while flat, the metatarsal head while flat and during

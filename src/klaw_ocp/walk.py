@@ -170,7 +170,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
             # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
             # the next step's hind leg, whose toe-off starts that step's swing1
-            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x)
+            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest)
             for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
                 interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
                 plan = plans[k]

@@ -34,7 +34,7 @@ LANDING_JOINT_RATE = math.radians(900)
 LANDING_FOOT_RATE = math.radians(1600)
 #: the knee flexions at heel strike tried, least first (rad)
 LANDING_KNEE_STEP = math.radians(0.5)
-LANDING_KNEE_MAX = math.radians(20.0)
+LANDING_KNEE_MAX = math.radians(15.0)
 #: the time step over which the starting rates are measured (s)
 _RATE_STEP = 1e-4
 
@@ -94,22 +94,29 @@ def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> tuple
 
 def least_landing_knee(make_foot, hip, hip_velocity, usable: bool = True):
     """The stance foot of the least knee flexion at heel strike tried whose thigh, knee and ankle
-    start at most LANDING_JOINT_RATE; the most flexed one tried if none does. ``make_foot(knee,
-    rate)`` builds the foot landing with that knee flexion (rad), its pitch starting at ``rate``
-    (rad/s; None: the rate that keeps the hip-ankle distance still, capped at LANDING_FOOT_RATE
-    for a bent knee), and has that rate as ``rocker_rate``. A straight leg must start at the
-    rate that holds its length; a bent one starts at the rate, at most that one, that keeps the
-    largest joint rate least. ``usable`` False (no rocker to measure) takes the straight leg."""
+    start at most LANDING_JOINT_RATE; if none does, the one whose largest joint rate is least.
+    ``make_foot(knee, rate)`` builds the foot landing with that knee flexion (rad), its pitch
+    starting at ``rate`` (rad/s; None: the rate that keeps the hip-ankle distance still, capped at
+    LANDING_FOOT_RATE for a bent knee), and has that rate as ``rocker_rate``. A straight leg must
+    start at the rate that holds its length; a bent one starts at the rate, at most that one, that
+    keeps the largest joint rate least. ``usable`` False (no rocker to measure) takes the straight
+    leg."""
     straight = make_foot(0.0, None)
-    if not usable or np.max(np.abs(starting_rates(straight, hip, hip_velocity))) <= LANDING_JOINT_RATE:
+    if not usable:
         return straight
-    n = int(round(LANDING_KNEE_MAX / LANDING_KNEE_STEP))
-    for k in range(1, n + 1):
+    best = (float(np.max(np.abs(starting_rates(straight, hip, hip_velocity)))), 0.0, None)
+    if best[0] <= LANDING_JOINT_RATE:
+        return straight
+    for k in range(1, int(round(LANDING_KNEE_MAX / LANDING_KNEE_STEP)) + 1):
         knee = k * LANDING_KNEE_STEP
         capped = make_foot(knee, None)
         most = capped.rocker_rate
         at_zero = starting_rates(make_foot(knee, 0.0), hip, hip_velocity)
         slope = (starting_rates(capped, hip, hip_velocity) - at_zero) / most if most > 0 else np.zeros(3)
-        rate, largest = _least_largest(at_zero, slope, most)
-        if largest <= LANDING_JOINT_RATE or k == n:
-            return make_foot(knee, rate)
+        rate, _ = _least_largest(at_zero, slope, most)
+        foot = make_foot(knee, rate)
+        largest = float(np.max(np.abs(starting_rates(foot, hip, hip_velocity))))   # (the lines are a model)
+        if largest <= LANDING_JOINT_RATE:
+            return foot
+        best = min(best, (largest, knee, rate))
+    return make_foot(best[1], best[2])

@@ -8,7 +8,8 @@ from dataclasses import replace
 import numpy as np
 
 from .leg_geometry import FlatFoot
-from .virtual_leg import RULE_FIELDS, VirtualLegFrames, leg_frames, rule_pitch
+from .pitch_rules import RULE_FIELDS, rule_pitch
+from .virtual_leg import VirtualLegFrames, leg_frames
 
 
 def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:

@@ -99,7 +99,8 @@ def _turned(body, feet: list, on: _Grids, ankle_y, shank):
     # moving towards the level sole), and so can overshoot into the other limit: the toe then goes
     # down where the heel needed the turn; clipped to both limits again, the clip rate-limited too
     back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
-    return scheduled, theta6, turn + _cone_envelope(on, back)
+    # (capped at the ends too: there the foot is the stance foot's, on the ground by construction)
+    return scheduled, theta6, turn + _cone_envelope(on, back, capped_at_ends=True)
 
 
 def _at_times(feet: list, times: list, on: _Grids, *on_grid):

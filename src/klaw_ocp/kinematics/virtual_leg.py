@@ -37,11 +37,9 @@ import numpy as np
 from ..body import Body
 from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
-from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion, smoothstep
+from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion
+from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
 
-#: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
-#: flexion): a fully straight knee is a singular point of the inverse kinematics.
-REACH_FRACTION = 1 - 1e-3
 #: the least time (s) over which the heel's rise from the ground is a straight line in the pitch
 HEEL_OFF_CHORD = 0.02
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
@@ -83,7 +81,12 @@ class StanceFoot:
     t_step: float                  # the other leg's heel strike: the double support begins
     t_heel_off: float = math.inf
     t_toe_off: float = math.inf
-    pitch_ds_start: float = 0.0    # the pitch at the other leg's heel strike
+    #: the push-off's line starts at t_push (the other leg's heel strike, earlier where the double
+    #: support is short: :func:`.pitch_rules.push_start`) from pitch_ds_start; the double support
+    #: keeps at least pitch_ds_floor, where single support left the pitch at the other heel strike
+    t_push: float = math.inf
+    pitch_ds_start: float = 0.0
+    pitch_ds_floor: float = 0.0
     pitch_toe_off: float = 0.0
     #: the pitch rate at heel strike (rad/s, >= 0): see :meth:`at_heel_strike`
     rocker_rate: float = 0.0
@@ -232,95 +235,32 @@ class StanceFoot:
         return math.isfinite(self.t_toe_off)
 
     def pitch_at_other_heel_strike(self, hip: np.ndarray) -> float:
-        """Where single support leaves the foot's pitch when the other leg strikes (>= 0)."""
-        before = np.array([self.t_step - 1e-12])
-        return max(float(self.pitch(before, np.atleast_2d(hip))[0]), 0.0)
+        """Where single support leaves the foot's pitch when the other leg strikes (>= 0), and at
+        least the reach there (a hind foot with no single support: the push starts from its
+        reach, not below it, where the line would overtake the reach with a kink in the knee)."""
+        before, hips = np.array([self.t_step - 1e-12]), np.atleast_2d(hip)
+        fraction = single_reach_fraction(self.t_step, self.t_flat, self.t_step)
+        return max(float(self.pitch(before, hips)[0]), float(self.reach_pitch(hips, fraction)[0]), 0.0)
 
     def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float,
                             start: float | None = None) -> "StanceFoot":
-        """The rules of the double support: the pitch starts where single support left it
-        (``start``, when the caller has :meth:`pitch_at_other_heel_strike` already) and runs to
-        ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike."""
+        """The rules of the double support: the pitch runs from where single support left it
+        (``start``, when the caller has :meth:`pitch_at_other_heel_strike` already) to
+        ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike; where the double
+        support is shorter than MIN_PUSH_OFF, the line begins that long before toe-off, from the
+        single support's held pitch there."""
         if start is None:
             start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
+        t_toe_off = self.t_step + t_ds
+        t_push = push_start(self.t_step, t_toe_off, self.t_flat)
+        line_start = float(np.interp(t_push, self.single_t, self.single_pitch)) if t_push < self.t_step and self.single_t else start
         # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
         # does not: its heel rising at once keeps the leg from straightening as the hip moves away
         reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
         straight = reach >= self.foot.body.l1 * (REACH_FRACTION - 1e-9)
-        return replace(self, t_toe_off=self.t_step + t_ds, pitch_ds_start=start, pitch_toe_off=max(pitch_toe_off, start),
-                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0))
-
-
-#: The rules of :meth:`StanceFoot.pitch` that differ from stance to stance (:func:`rule_pitch`
-#: takes them as numbers or one per sample: :mod:`.stance_legs` evaluates many stances at once).
-RULE_FIELDS = ("t_flat", "rocker_pitch", "rocker_rate", "t_heel_off", "t_step", "t_toe_off", "pitch_ds_start",
-               "pitch_toe_off", "push_ease")
-
-
-def single_reach_fraction(t, t_flat, t_step):
-    """The hip-ankle distance, as a fraction of l1, that single support lets the leg reach at its
-    stance times ``t``: l1 when the foot is flat (the rocker's end, continuous with it), easing to
-    REACH_FRACTION by the other leg's heel strike (a smoothstep), where the double support keeps
-    it. A leg allowed to go fully straight straightens as the square root of time (up to 3.6° of
-    knee in the last 2 ms of single support in configs/accelerate.yaml); kept REACH_FRACTION short,
-    its knee meets that limit at a finite rate."""
-    s = np.clip((np.asarray(t, float) - t_flat) / np.maximum(np.asarray(t_step, float) - t_flat, 1e-12), 0.0, 1.0)
-    return 1 - (1 - REACH_FRACTION) * s * s * (3 - 2 * s)
-
-
-def _rocker_left(t, t_flat):
-    """How much of the heel-strike toe angle is left at ``t`` (1 at heel strike, 0 once flat)."""
-    return np.where(t_flat > 0, 1 - smoothstep(t / np.where(t_flat > 0, t_flat, 1.0)), 0.0)
-
-
-def _rocker_pitch(t, t_flat, p0, rate):
-    """The pitch while the foot turns about the heel, p0 (1 - s)^k (1 + c s) with s = t/t_flat and
-    p0 the heel-strike pitch: it starts at ``rate`` and reaches flat at t_flat with zero rate,
-    never overshooting. That is the cubic Hermite curve (k = 2) while the rate is at most three
-    times the mean one; a faster start (the hip approaching the heel fast after impact) takes the
-    power (1 - s)^(k + 1), k + 1 = rate·t_flat/|p0| (c = -1). Flat throughout for a standing foot."""
-    turning = (t_flat > 0) & (p0 != 0)
-    t_flat, p0 = np.where(turning, t_flat, 1.0), np.where(turning, p0, -1.0)
-    s = np.clip(t / t_flat, 0.0, 1.0)
-    relative_rate = rate * t_flat / -p0
-    k = np.maximum(2.0, relative_rate - 1)
-    return np.where(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
-
-
-def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.ndarray:
-    """:meth:`StanceFoot.pitch` with the rules (RULE_FIELDS) as numbers or one per sample: ``reach``
-    is :meth:`StanceFoot.reach_pitch` of the foot's geometry, ``held(t, rows)`` the single
-    support's held pitch at those rows (None before the heel-off search has set it)."""
-    def at(name, rows):
-        value = rules[name]
-        return value[rows] if np.ndim(value) else value
-    # each rule only where it applies (the walk asks mostly for one of them at a time, and each
-    # numpy operation costs about as much on no samples as on a few)
-    pitch = np.zeros(len(t))
-    rocker = t < rules["t_flat"]
-    if rocker.any():
-        pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
-                                      at("rocker_rate", rocker))
-    single = ~rocker & (t >= rules["t_heel_off"]) & (t < rules["t_step"])
-    if single.any():
-        pitch[single] = reach(hips[single], single_reach_fraction(t[single], at("t_flat", single), at("t_step", single)))
-        kept = held(t, single)
-        if kept is not None:
-            pitch[single] = np.maximum(pitch[single], kept)
-    push = ~rocker & (t >= rules["t_step"])
-    if push.any():
-        t_step, ease = at("t_step", push), at("push_ease", push)
-        through = np.clip((t[push] - t_step) / np.maximum(at("t_toe_off", push) - t_step, 1e-12), 0, 1)
-        if np.any(ease > 0):    # easing in: a cubic with zero start rate, joining the line with its slope
-            s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
-            through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
-        start, end = at("pitch_ds_start", push), at("pitch_toe_off", push)
-        linear = start + (end - start) * through
-        # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
-        # stood still) to REACH_FRACTION by toe-off
-        left = single_reach_fraction(t_step, at("t_flat", push), t_step)
-        pitch[push] = np.maximum(linear, reach(hips[push], left + (REACH_FRACTION - left) * through))
-    return pitch
+        return replace(self, t_toe_off=t_toe_off, t_push=t_push, pitch_ds_start=min(line_start, start),
+                       pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start),
+                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0, EARLY_PUSH_EASE if t_push < self.t_step else 0.0))
 
 
 def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> VirtualLegFrames:
@@ -328,7 +268,7 @@ def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> V
     heel strike ``rocker_theta6`` fading out by ``t_flat``, numbers or one per sample), then the
     hip and knee by two-link inverse kinematics."""
     q = geometry.meta_off_theta6
-    pose = geometry.foot.pose(pitch, q, rocker_theta6 * _rocker_left(t, t_flat))
+    pose = geometry.foot.pose(pitch, q, rocker_theta6 * rocker_left(t, t_flat))
     body = geometry.foot.body
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
@@ -386,10 +326,15 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
 #: toe-off posture and rate that start swing1 follow from the push's line.
 PUSH_EASE = 0.5
 PUSH_EASE_FROM_REST = PUSH_EASE
+EARLY_PUSH_EASE = 1.0
 
 
-def hind_foot_at_rest(body: Body, attrs, ankle_x: float) -> StanceFoot:
-    """The hind foot of a walk's first step, with no stance behind it (a walking start or a start
-    from rest): flat until the double support, which then pitches it from its reach to toe-off,
-    easing in from rest (PUSH_EASE_FROM_REST)."""
-    return replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0, push_ease=PUSH_EASE_FROM_REST)
+def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True) -> StanceFoot:
+    """The hind foot of a walk's first step, with no stance behind it: flat until the double
+    support, which then pitches it from its reach to toe-off, easing in from rest
+    (PUSH_EASE_FROM_REST). In a walking start (``from_rest`` False) the walk begins mid-stride:
+    the leg is at its reach (REACH_FRACTION, not straight), and where the double support is
+    shorter than MIN_PUSH_OFF the push-off began before the walk, so the heel is up at its start."""
+    foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0, push_ease=PUSH_EASE_FROM_REST)
+    # mid-stride, its foot was flat and its leg at its reach before the walk began
+    return foot if from_rest else replace(foot, t_flat=-MIN_PUSH_OFF)

@@ -1,0 +1,134 @@
+"""Where the virtual leg meets the swing (docs/body.md): the landing with the knee flexed where a
+straight leg cannot follow the stance leg's compression (kinematics/landing.py), the push-off that
+begins in single support where the double support is short (kinematics/pitch_rules.py), and the
+swing foot's ground guard on a steep foot (kinematics/swing_foot.py)."""
+import math
+
+import numpy as np
+import pytest
+
+from klaw_ocp.body import Body
+from klaw_ocp.dynamics.kinematics import stance_hip
+from klaw_ocp.kinematics.landing import LANDING_JOINT_RATE, LANDING_KNEE_MAX, starting_rates
+from klaw_ocp.kinematics.pitch_rules import MIN_PUSH_OFF, REACH_FRACTION
+from klaw_ocp.kinematics.swing_foot import SwingFoot
+from klaw_ocp.walk import simulate_walk
+
+
+def _walk(speed, steps=4, **walk):
+    return simulate_walk({"name": "w", "body": {"height": 1.8, "mass": 80},
+                          "walk": {"speed": speed, "steps": steps, **walk}}, method="multiple-shooting")
+
+
+@pytest.fixture(scope="module")
+def fast():
+    return _walk(8.0)
+
+
+@pytest.fixture(scope="module")
+def natural():
+    return _walk(5.0)
+
+
+def _landings(walk):
+    """(step, its stance foot, the hip and its velocity at the heel strike) of every heel strike."""
+    body = walk.spec.body
+    out = []
+    for step in walk.steps:
+        foot = step.stance_foot
+        if foot.starts_standing:
+            continue
+        _, velocity = stance_hip(body, step.subphase("stance").states[0], np.array([step.origin_x, body.l9]))
+        out.append((step, foot, step.stance_hips[0], np.asarray(velocity, float)))
+    return out
+
+
+def test_the_natural_walk_lands_straight(natural):
+    """The straight leg follows the hip's approach at 5 km/h: no flexion at heel strike, the leg's
+    length held still by the foot's rocker, as before the landing rule."""
+    for _, foot, hip, velocity in _landings(natural):
+        assert foot.landing_knee == 0.0
+        legs = foot.frames(np.array([0.0]), hip[None, :])
+        assert np.hypot(*(legs.ankle[0] - hip)) == pytest.approx(natural.spec.body.l1, abs=1e-12)
+        assert np.abs(starting_rates(foot, hip, velocity)).max() <= LANDING_JOINT_RATE
+
+
+def test_a_fast_walk_lands_on_a_flexed_knee_whose_joints_start_within_the_rate(fast):
+    """At 8 km/h the straight leg's foot would have to come down at about 1900°/s: the leg lands
+    with the knee flexed (the least flexion tried that keeps thigh, knee and ankle at most
+    LANDING_JOINT_RATE), its heel on the planned point and its foot more toe-up than the straight
+    leg's."""
+    body = fast.spec.body
+    flexed = 0
+    for _, foot, hip, velocity in _landings(fast):
+        legs = foot.frames(np.array([0.0]), hip[None, :])
+        assert legs.theta4[0] == pytest.approx(foot.landing_knee, abs=1e-9)
+        assert legs.heel[0] == pytest.approx([foot.foot.ankle_x - body.l8, 0.0], abs=1e-12)
+        assert 0 <= foot.landing_knee <= LANDING_KNEE_MAX
+        if foot.landing_knee > 0:
+            flexed += 1
+            assert np.abs(starting_rates(foot, hip, velocity)).max() <= LANDING_JOINT_RATE * (1 + 1e-9)
+            assert foot.rocker_pitch < 0
+    assert flexed >= 2
+
+
+def test_the_swing_leg_of_a_fast_walk_lands_without_a_jump(fast):
+    """The body's swing leg bends into the landing posture over swing3: at 500 fps no angle of
+    the legs moves by 2° or more across any heel strike."""
+    from klaw_ocp.kinematics.body_motion import body_motion
+    from klaw_ocp.kinematics.skeleton import ANGLE_NAMES
+    motion = body_motion(fast, 500.0)
+    legs = [k for k, name in enumerate(ANGLE_NAMES) if name[2:].startswith(("hip_flexion", "knee", "ankle"))]
+    for step in fast.steps[1:]:
+        i = int(round(step.t_start * 500))
+        window = np.degrees(np.abs(np.diff(motion.angles[i - 3:i + 4, legs], axis=0)))
+        assert window.max() < 2.0, step.index
+
+
+def test_a_short_double_support_starts_the_push_off_in_single_support():
+    """configs/short_steps.yaml's cadence: eq. 2 gives a double support of 17 ms; the push-off's
+    line begins MIN_PUSH_OFF before toe-off, continuous with single support, and reaches the
+    toe-off pitch at toe-off."""
+    walk = simulate_walk({"name": "s", "body": {"height": 1.8, "mass": 80},
+                          "walk": {"speed": 5.0, "step_length": 0.5, "steps": 4}}, method="multiple-shooting")
+    step = walk.steps[1]
+    foot = step.stance_foot                  # completed by step 2's double support
+    assert foot.t_toe_off - foot.t_step < MIN_PUSH_OFF
+    assert foot.t_push == pytest.approx(foot.t_toe_off - MIN_PUSH_OFF, abs=1e-12)
+    t = np.linspace(foot.t_push - 0.01, foot.t_toe_off, 400)
+    hips = np.column_stack([np.interp(t, *_hip_track(walk, step, 0)), np.interp(t, *_hip_track(walk, step, 1))])
+    pitch = foot.pitch(t, hips)
+    assert np.all(np.diff(pitch) >= -1e-9)                             # the heel never comes down
+    assert np.abs(np.diff(pitch)).max() < math.radians(1.0)           # no jump at t_push or t_step
+    assert pitch[-1] == pytest.approx(foot.pitch_toe_off, abs=1e-9)
+
+
+def _hip_track(walk, step, axis):
+    """The hip's ``axis`` coordinate over the stance leg's time: its own stance, then the next
+    step's double support."""
+    after = walk.steps[step.index + 1]
+    t = np.r_[step.subphase("stance").t, step.plan.timings.t_step + after.subphase("stance").t[1:]]
+    return t, np.r_[step.stance_hips[:, axis], after.stance_hips[1:, axis]]
+
+
+def test_a_walking_start_begins_with_the_hind_leg_at_its_reach(natural):
+    """The walk begins mid-stride: the hind leg of the first step is at its reach (REACH_FRACTION
+    of l1, its knee a little flexed), not straight, so its knee does not snap as the push begins."""
+    first = natural.steps[0]
+    foot, hip = first.hind_foot, first.stance_hips[0]
+    legs = foot.frames(np.array([foot.t_step]), hip[None, :])
+    assert np.hypot(*(legs.ankle[0] - hip)) <= natural.spec.body.l1 * REACH_FRACTION + 1e-12
+    assert legs.theta4[0] > math.radians(4)
+
+
+def test_the_ground_guard_leaves_a_steep_foot_whose_points_cannot_reach_the_ground():
+    """A foot standing nearly on its toe (long steps' toe-off at MAX_PITCH) with its ankle higher
+    than the toe is long: no angle puts its heel or toe into the ground, so the guard must not
+    turn it (it turned such a foot by 5.3° at the first frame of swing)."""
+    body = Body(height=1.8, mass=80.0)
+    foot = SwingFoot(0.0, 0.2, 0.3, 0.4, math.radians(43.0), math.radians(30.0), math.radians(100.0),
+                     math.radians(90.0), 0.0)
+    t = np.array([0.0])
+    shank = math.radians(42.0)
+    theta5, _ = foot.ground_limits(body, t, np.array([0.26]), np.array([shank]))
+    assert theta5[0] == pytest.approx(math.radians(43.0), abs=1e-12)
