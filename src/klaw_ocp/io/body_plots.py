@@ -21,7 +21,6 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 from matplotlib.ticker import MultipleLocator
 
-from ..body import Body
 from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
 from .gait_diagram import gait_events
 from .plot_style import FONT_PT, LEG_COLOURS, add_axes_in, new_figure, style_axes
@@ -69,7 +68,7 @@ def skeleton_at(run, times):
                                    run.angles["time"][-1])
     root = np.column_stack([np.interp(times, a["time"], a[f"root_{axis}"]) for axis in "xyz"])
     angles = np.radians(np.column_stack([np.interp(times, a["time"], a[name]) for name in ANGLE_NAMES]))
-    return forward_kinematics(Body(height=run.body["height"], mass=run.body["mass"]), root, angles)
+    return forward_kinematics(run.body_model(), root, angles)
 
 
 def _point(skeleton, kind: str, name: str) -> np.ndarray:

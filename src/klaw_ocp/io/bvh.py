@@ -82,7 +82,7 @@ def _table_and_body(motion, body) -> tuple[dict, Body]:
         if motion.angles is None:
             raise ValueError(f"motion: the run {motion.name!r} has no angles (a results folder written "
                              f"before angles.csv was)")
-        table, body = motion.angles, motion.body if body is None else body
+        table, body = motion.angles, motion.body_model() if body is None else body
     elif hasattr(motion, "table") and callable(motion.table):     # kinematics.body_motion.BodyMotion
         table = motion.table()
     elif isinstance(motion, dict):
