@@ -148,8 +148,35 @@ def short_repr(value, limit: int = MAX_QUOTED) -> str:
         text = f"<an integer of {value.bit_length()} bits>" if isinstance(value, int) else f"<{type(value).__name__}>"
     except Exception:  # noqa: BLE001 - a value whose repr fails is still reported
         text = f"<{type(value).__name__}>"
-    text = " ".join(text.split())
+    return cut(one_line(text), limit)
+
+
+def one_line(text) -> str:
+    """``str(text)`` with every run of white space (newlines too) folded into one space."""
+    return " ".join(str(text).split())
+
+
+def cut(text: str, limit: int) -> str:
+    """``text`` if it has at most ``limit`` characters, else its first ``limit - 1`` and "…"."""
     return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+#: The longest key a field path names (characters); longer ones are cut with "…".
+MAX_PATH_KEY = 40
+
+
+def field_path(parts) -> str:
+    """A config field as messages name it, from its keys and list indices:
+    ``walk.schedule[2].speed``; each key cut to MAX_PATH_KEY characters (one that is not a string
+    by its :func:`short_repr`); ``config`` for the document itself."""
+    out = ""
+    for part in parts:
+        if isinstance(part, int) and not isinstance(part, bool):
+            out += f"[{part}]"
+        else:
+            text = cut(part if isinstance(part, str) else short_repr(part, MAX_PATH_KEY), MAX_PATH_KEY)
+            out += f".{text}" if out else text
+    return out or "config"
 
 
 def out_of_range(field: str, value, allowed: str) -> str:

@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, out_of_range
+from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, one_line, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
 
@@ -106,7 +106,7 @@ def expand(config, vary: dict, methods=None) -> tuple[str, list[dict]]:
 
 
 def _prefixed(exc: KlawError, label: str) -> KlawError:
-    message = f"{label}: {' '.join(str(exc).split())}"
+    message = f"{label}: {one_line(exc)}"
     try:
         return type(exc)(message)
     except TypeError:
@@ -184,7 +184,7 @@ def _float(value):
 
 
 def _one_line(exc: BaseException, prefix: str = "") -> str:
-    text = " ".join(str(exc).split())
+    text = one_line(exc)
     return f"{prefix}: {text}" if prefix and text else (text or prefix)
 
 
