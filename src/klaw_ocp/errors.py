@@ -66,10 +66,10 @@ class ConvergenceError(KlawError, RuntimeError):
 
     def as_dict(self) -> dict:
         """The failure as summary.json records it (``message``: the solver's own words)."""
-        return {"step": int(self.step), "subphase": str(self.subphase), "residual": _finite(self.residual),
+        return {"step": int(self.step), "subphase": str(self.subphase), "residual": finite_real(self.residual),
                 "cause": self.cause, "message": self.detail,
                 "iterations": None if self.iterations is None else int(self.iterations),
-                "path_min": _finite(self.path_min), "nlp": self.nlp}
+                "path_min": finite_real(self.path_min), "nlp": self.nlp}
 
 
 #: the margin below which a path constraint counts as violated (the solvers' own)
@@ -81,7 +81,6 @@ def failure_cause(residual: float, message: str = "", iterations: int | None = N
                   max_iterations: int | None = None) -> str:
     """Classify a failed subphase solve from what its solution reports (see
     :attr:`ConvergenceError.cause`); the solvers' behaviour is not changed by it."""
-    import math
     if iterations is None and path_min is None and not nlp:
         return message or "final conditions not met"
     causes = []
@@ -102,11 +101,6 @@ def failure_cause(residual: float, message: str = "", iterations: int | None = N
     if not causes:
         causes.append(f"final conditions not met (residual {residual:.3g})")
     return "; ".join(causes)
-
-
-def _finite(value):
-    import math
-    return float(value) if value is not None and math.isfinite(float(value)) else None
 
 
 class Interrupted(KeyboardInterrupt):

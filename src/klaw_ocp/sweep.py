@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, one_line, out_of_range
+from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, finite_real, one_line, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
 
@@ -140,7 +140,7 @@ def run_walk(mapping: dict, method: str) -> dict:
         except ConvergenceError as err:
             walk = err.partial
             row.update(status="failed", failed_step=int(err.step), failed_subphase=str(err.subphase),
-                       residual=_float(err.residual), message=_one_line(err))
+                       residual=finite_real(err.residual), message=_one_line(err))
         except Exception as exc:  # noqa: BLE001 - any other failure is this walk's, not the sweep's
             walk = None
             row.update(status="error", message=_one_line(exc, type(exc).__name__))
@@ -164,7 +164,7 @@ def _walk_metrics(walk, keep_residual: bool) -> dict:
     subs = [(entry.get("index", k), s) for k, entry in enumerate(summary["steps"]) for s in entry["subphases"]]
     residuals = [s["residual"] for _, s in subs if s.get("residual") is not None]
     out = {"steps": len(walk.steps), "iterations": int(sum(s.get("iterations", 0) for _, s in subs)),
-           "mean_speed_kmh": _float(summary.get("mean_hip_speed_kmh")),
+           "mean_speed_kmh": finite_real(summary.get("mean_hip_speed_kmh")),
            "build_s": float(sum(s.get("build_s", 0.0) for _, s in subs)),
            "max_subphase_s": float(max((s.get("wall_s", 0.0) for _, s in subs), default=0.0)),
            "fallbacks": ";".join(f"step{k}.{s['name']}:{f.get('name') if isinstance(f, dict) else f}"
@@ -177,10 +177,6 @@ def _walk_metrics(walk, keep_residual: bool) -> dict:
         values = np.abs(table[column][np.isfinite(table[column])])
         out[f"peak_{column}"] = float(values.max()) if values.size else None
     return out
-
-
-def _float(value):
-    return float(value) if value is not None and math.isfinite(float(value)) else None
 
 
 def _one_line(exc: BaseException, prefix: str = "") -> str:
