@@ -221,9 +221,9 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     method name, "both" or a sequence. ``workers`` (default ``os.cpu_count()``) local processes,
     1 = in this process; ``scheduler`` a dask.distributed address (``workers`` is then the
     cluster's business). Every combination is validated first. Returns one row per walk and
-    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(rows)``, if
-    given, is called after each walk with the rows finished so far (in grid order): ``klaw-ocp
-    sweep`` rewrites sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
+    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(row)``, if
+    given, is called after each walk with its row, in the order the walks finish: ``klaw-ocp
+    sweep`` appends it to sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
     ``partial`` is the rows finished (the walks running in local workers are waited for).
     """
     _, tasks = expand(config, vary, methods)
@@ -241,7 +241,7 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
         results[i] = row
         bar.update()
         if on_row is not None:
-            on_row(finished())
+            on_row({**tasks[i]["values"], **row})
 
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:
@@ -306,13 +306,16 @@ def _cell(value) -> str:
     return format_value(value)
 
 
-def sweep_csv(rows: list[dict], varied_paths: list[str]) -> str:
+def sweep_csv(rows: list[dict], varied_paths: list[str], header: bool = True) -> str:
+    """``sweep.csv``: the header and one line per row; without ``header`` only the lines, which
+    :func:`append_sweep_row` adds to the file."""
     import csv
     import io
 
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow([*varied_paths, *RESULT_COLUMNS])
+    if header:
+        writer.writerow([*varied_paths, *RESULT_COLUMNS])
     for row in rows:
         writer.writerow([_cell(row.get(c)) for c in (*varied_paths, *RESULT_COLUMNS)])
     return buffer.getvalue()
@@ -328,6 +331,28 @@ def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = Non
     atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
     write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
     return paths
+
+
+def append_sweep_row(path, row: dict, varied_paths) -> None:
+    """Add ``row``'s line to the sweep.csv at ``path`` (with its header), or write the file with
+    the header and that line when there is none yet.
+
+    Why appending is safe: the first line and the header go in together, atomically, so the file
+    is never without its header; each later line is one write, flushed and fsynced before the
+    next walk's, so a finished walk is on the disk once its row is (a crash can at worst cut the
+    line being written, never an earlier one). The lines are in the order the walks finished;
+    ``klaw-ocp sweep`` writes the file again, atomically and in grid order, when the sweep ends
+    (:func:`write_sweep`) or is interrupted."""
+    from .io.writers import atomic_write_text
+
+    path = Path(path)
+    if not path.is_file():
+        atomic_write_text(path, sweep_csv([row], list(varied_paths)))
+        return
+    with open(path, "a", encoding="utf-8", newline="") as handle:
+        handle.write(sweep_csv([row], list(varied_paths), header=False))
+        handle.flush()
+        os.fsync(handle.fileno())
 
 
 def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:
