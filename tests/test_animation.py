@@ -98,7 +98,7 @@ def test_the_gif_rate_is_its_own_whatever_the_angles_rate(run_dir):
 
 
 def test_footprints_lie_on_the_ground_where_each_foot_was_planted(run_dir):
-    from klaw_ocp.io.animation import skeleton_at
+    from klaw_ocp.io.body_plots import skeleton_at
     run = RunData.from_folder(run_dir)
     prints = footprints(run)
     events = run.summary["events"]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from klaw_ocp.io.fixed_text import fixed_decimals_text
+from klaw_ocp.io.fixed_text import fixed_decimals_rows, fixed_decimals_text
 
 
 def _percent_format(rounded, decimals, separator):
@@ -31,3 +31,11 @@ def test_values_the_exact_form_cannot_take_are_left_to_the_percent_format():
     assert fixed_decimals_text(np.array([[1.0, 1e6]]), 9, " ") is None          # 1e15 > 2**49
     assert fixed_decimals_text(np.array([[1.0, 2e6]]), 2, " ") is None          # seven digits
     assert fixed_decimals_text(np.array([[123456.5, -999999.25]]), 2, " ") == "123456.50 -999999.25\n"
+
+
+def test_the_writers_rows_round_first_and_fall_back_to_the_percent_format():
+    values = np.array([[-1e-12, 0.1234567891234], [2.5, -3.0]])
+    assert fixed_decimals_rows(values, 9, " ") == "0.000000000 0.123456789\n2.500000000 -3.000000000\n"
+    large = np.array([[1e7, -0.5], [np.inf, 1.0]])       # beyond the numpy form: "%" per row
+    assert fixed_decimals_rows(large, 9, "\t") == _percent_format(np.round(large, 9) + 0.0, 9, "\t")
+    assert fixed_decimals_rows(np.zeros((0, 3)), 9, " ") == ""

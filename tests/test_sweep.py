@@ -223,6 +223,26 @@ def test_failures_are_rows_and_do_not_stop_the_sweep(short_config, tmp_path, cap
     assert (out / "sweep.png").exists()
 
 
+def test_sweep_csv_grows_by_appended_lines_while_the_walks_run(short_config, tmp_path, monkeypatch):
+    """Each finished walk adds its line to the staging folder's sweep.csv, the file appended to
+    and not written again: a walk sees the header and the lines of the walks before it."""
+    out, seen = tmp_path / "o", []
+
+    def quick(mapping, method):
+        staging = list(tmp_path.glob("o.partial-*"))
+        path = staging[0] / "sweep.csv" if staging else None
+        seen.append((path.stat().st_ino, path.read_text()) if path is not None and path.is_file() else None)
+        return {**dict.fromkeys(sweep.RESULT_COLUMNS), "method": method, "status": "ok", "steps": 2,
+                "wall_s": 0.5, "iterations": 3}
+    monkeypatch.setattr(sweep, "run_walk", quick)
+    assert main(["sweep", str(short_config), "--vary", "walk.speed=3,4,5", "--workers", "1", "--out", str(out),
+                 "--quiet"]) == 0
+    assert seen[0] is None and seen[1][0] == seen[2][0]           # one file, appended to
+    assert seen[1][1].count("\n") == 2 and seen[2][1].startswith(seen[1][1]) and seen[2][1].count("\n") == 3
+    final = (out / "sweep.csv").read_text()
+    assert final.startswith(seen[2][1]) and final.count("\n") == 4
+
+
 def test_fallbacks_column_reads_the_summary(monkeypatch):
     import klaw_ocp.results as results
     original = results.walk_summary

@@ -28,7 +28,7 @@ from typing import Callable
 
 from .commands import EXIT_INTERRUPTED, EXIT_USAGE, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
-from .errors import ConfigError, KlawError, short_repr
+from .errors import ConfigError, KlawError, cut, one_line, short_repr
 
 
 class UsageError(ConfigError):
@@ -37,7 +37,7 @@ class UsageError(ConfigError):
 
 def _brief(text: str | None) -> str:
     """The first clause of an argument's help: what the argument is."""
-    text = " ".join((text or "").split())
+    text = one_line(text or "")
     for stop in ("; ", " (default", ", repeat"):
         text = text.split(stop)[0]
     return text
@@ -83,7 +83,7 @@ class KlawArgumentParser(argparse.ArgumentParser):
         """argparse's remaining errors (missing arguments, an option without its value, an
         ambiguous abbreviation), as one line. (Python 3.12+ raises some of them as an
         ArgumentError without an argument; the message says which.)"""
-        message = " ".join(str(message).split())
+        message = one_line(message)
         required = "the following arguments are required: "
         if required in message:
             name = message.split(required, 1)[1].split(", ")[0]
@@ -98,7 +98,7 @@ class KlawArgumentParser(argparse.ArgumentParser):
         exc = sys.exc_info()[1]
         if isinstance(exc, argparse.ArgumentError) and exc.argument_name:
             action = self._action_named(exc.argument_name)
-            detail = " ".join(exc.message.split())
+            detail = one_line(exc.message)
             if detail.startswith("expected"):        # --speed with no value
                 what = _brief(action.help) if action is not None else ""
                 raise UsageError(f"{exc.argument_name}: got nothing, allowed {detail.replace('expected ', '')}"
@@ -157,8 +157,7 @@ def parse(parser: KlawArgumentParser, argv: list[str] | None) -> argparse.Namesp
         sub = parser._subparsers._group_actions[0].choices[args.command]   # noqa: SLF001
         first = extra[0]
         if first.startswith("-") and len(first) > 1:
-            option = first.split("=")[0]
-            option = option if len(option) <= 40 else option[:39] + "…"
+            option = cut(first.split("=")[0], 40)
             raise UsageError(f"{option}: got an unknown option, allowed the options of "
                              f"{PROG} {args.command}: {sub.known_options()}")
         raise UsageError(f"{PROG} {args.command}: got the extra argument {short_repr(first, 60)}, allowed "

@@ -33,10 +33,10 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from .body import Body
-from .errors import ConfigError, GaitLimitError, KlawError, short_repr
+from .errors import ConfigError, GaitLimitError, KlawError, field_path, short_repr
 from .gait import LocomotionAttributes, StepPlan, plan_steps
 from .gait.plan import MAX_STEPS, MAX_WALK_S
-from .config_yaml import read_yaml_file, short_value as _short
+from .config_yaml import read_yaml_file
 
 class _FieldError(ValueError):
     """Raised inside a validator; the field path is filled in from pydantic's error location."""
@@ -45,6 +45,10 @@ class _FieldError(ValueError):
         super().__init__(f"got {got}, allowed {allowed}")
         self.got, self.allowed = got, allowed
 
+
+#: The longest value a config message quotes: shorter than errors.MAX_QUOTED, the line also names
+#: the field's path and what it allows
+_QUOTED = 60
 
 #: Shared pydantic settings: unknown keys are errors, no silent "5" -> 5.0, no NaN or infinity.
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
@@ -214,7 +218,7 @@ class ExperimentConfig(BaseModel):
     def from_mapping(cls, data: Any) -> "ExperimentConfig":
         """Validate a plain mapping (as from YAML); every failure is one ConfigError line."""
         if not isinstance(data, dict):
-            raise ConfigError(f"config: got {_short(data)}, allowed a mapping with name, body, walk")
+            raise ConfigError(f"config: got {short_repr(data, _QUOTED)}, allowed a mapping with name, body, walk")
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
@@ -281,7 +285,7 @@ def load_config(path, sets=()) -> ExperimentConfig:
     data = read_yaml_file(path)
     if sets:
         if not isinstance(data, dict):
-            raise ConfigError(f"config: got {_short(data)}, allowed a mapping with name, body, walk")
+            raise ConfigError(f"config: got {short_repr(data, _QUOTED)}, allowed a mapping with name, body, walk")
         from .config_paths import apply_sets
         data = apply_sets(data, sets)
     return ExperimentConfig.from_mapping(data)
@@ -305,17 +309,10 @@ _BOUNDS = {"greater_than": "a number > {gt}", "greater_than_equal": "a number >=
 
 
 def _path(loc) -> str:
-    out = ""
-    for part in loc:
-        if part == "[key]":
-            out += " (a key)"
-        elif isinstance(part, int) and not isinstance(part, bool):
-            out += f"[{part}]"
-        else:
-            text = part if isinstance(part, str) else short_repr(part, 40)
-            text = text if len(text) <= 40 else text[:39] + "…"
-            out += f".{text}" if out else text
-    return out or "config"
+    # pydantic ends the location of a key that fails its own check with the marker "[key]"
+    if loc and loc[-1] == "[key]":
+        return (field_path(loc[:-1]) if len(loc) > 1 else "") + " (a key)"
+    return field_path(loc)
 
 
 def _model_at(loc):
@@ -353,15 +350,15 @@ def _one_line(exc: ValidationError) -> ConfigError:
     if kind == "extra_forbidden":
         model = _model_at(loc)
         keys = ", ".join(model.model_fields) if model is not None else "the documented keys"
-        return ConfigError(f"{field}: got an unknown key (value {_short(err['input'])}), allowed only the keys {keys}{more}")
+        return ConfigError(f"{field}: got an unknown key (value {short_repr(err['input'], _QUOTED)}), allowed only the keys {keys}{more}")
     if kind == "missing":
         return ConfigError(f"{field}: got nothing, allowed a required value{more}")
     if kind == "invalid_key":   # a key that is not a string (1:, null:, a float)
-        return ConfigError(f"{_path(loc[:-1])}: got the key {_short(err['input'], 40)} "
+        return ConfigError(f"{_path(loc[:-1])}: got the key {short_repr(err['input'], 40)} "
                            f"({type(err['input']).__name__}), allowed string keys only{more}")
     if kind in _BOUNDS:
         ctx = {k: (f"{v:g}" if isinstance(v, float) else v) for k, v in (err.get("ctx") or {}).items()}
         allowed = _BOUNDS[kind].format(**ctx)
     else:
         allowed = _ALLOWED.get(kind, err["msg"])
-    return ConfigError(f"{field}: got {_short(err['input'])}, allowed {allowed}{more}")
+    return ConfigError(f"{field}: got {short_repr(err['input'], _QUOTED)}, allowed {allowed}{more}")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import yaml
 
-from .errors import ConfigError, out_of_range, short_repr
+from .errors import ConfigError, cut, field_path, one_line, out_of_range, short_repr
 
 
 #: The largest config file or YAML text read (bytes). The shipped configs are 1-2 KB; a schedule
@@ -38,7 +38,7 @@ class _BoundedLoader(_Loader):
         except Exception as exc:  # noqa: BLE001 - ValueError, OverflowError, PyYAML's IndexError on "!!float"
             value = short_repr(node.value, 40) if isinstance(node.value, str) else "a value"
             raise yaml.constructor.ConstructorError(None, None, f"cannot read {value} "
-                                                    f"({_cut(' '.join(str(exc).split()), 80)})",
+                                                    f"({cut(one_line(exc), 80)})",
                                                     node.start_mark) from None
 
 
@@ -49,17 +49,6 @@ class _Frame:
     def __init__(self, mapping: bool, anchor, start: int, level: int):
         self.mapping, self.anchor, self.start, self.level = mapping, anchor, start, level
         self.deepest, self.children, self.keys, self.key = level, 0, {}, None
-
-
-def _path_text(parts) -> str:
-    out = ""
-    for part in parts:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            text = part if len(part) <= 40 else part[:39] + "…"
-            out += f".{text}" if out else text
-    return out or "config"
 
 
 def _check_events(text: str, source: str) -> None:
@@ -88,12 +77,12 @@ def _check_events(text: str, source: str) -> None:
         nonlocal count
         count += nodes
         if count > MAX_YAML_NODES:
-            raise ConfigError(f"{_path_text(path())}: got more than {MAX_YAML_NODES} YAML nodes "
+            raise ConfigError(f"{field_path(path())}: got more than {MAX_YAML_NODES} YAML nodes "
                               f"(aliases expanded) by {where(event)} of {source}, allowed at most "
                               f"{MAX_YAML_NODES} (docs/limits.md)")
         level = len(stack) + nesting
         if level > MAX_YAML_DEPTH:
-            raise ConfigError(f"{_path_text(path())}: got mappings and lists nested {level} deep "
+            raise ConfigError(f"{field_path(path())}: got mappings and lists nested {level} deep "
                               f"({where(event)} of {source}{', an alias expanded' if isinstance(event, yaml.AliasEvent) else ''}), "
                               f"allowed at most {MAX_YAML_DEPTH} (docs/limits.md)")
         if stack:
@@ -117,7 +106,7 @@ def _check_events(text: str, source: str) -> None:
                 name = key if isinstance(key, str) else key[1]
                 first = frame.keys.get(key)
                 if first is not None and name != "<<":
-                    raise ConfigError(f"{_path_text(path(name))}: got the key a second time "
+                    raise ConfigError(f"{field_path(path(name))}: got the key a second time "
                                       f"({where(event)} of {source}; first at line {first}), allowed "
                                       f"each key once in a mapping")
                 frame.keys[key] = event.start_mark.line + 1
@@ -136,7 +125,7 @@ def _check_events(text: str, source: str) -> None:
             child(event)
         elif isinstance(event, yaml.AliasEvent):
             if any(frame.anchor == event.anchor for frame in stack):
-                raise ConfigError(f"{_path_text(path())}: got the alias *{event.anchor} inside its own "
+                raise ConfigError(f"{field_path(path())}: got the alias *{event.anchor} inside its own "
                                   f"anchor ({where(event)} of {source}), allowed aliases of complete "
                                   f"nodes only (a recursive document)")
             nodes, nesting = anchors.get(event.anchor, (1, 0))   # undefined: the loader says so
@@ -172,16 +161,11 @@ def parse_yaml(text: str, source: str = "config"):
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        problem = " ".join(str(problem).split())
-        raise ConfigError(f"{source}: got invalid YAML{at} ({_cut(problem)}), allowed well-formed YAML "
+        raise ConfigError(f"{source}: got invalid YAML{at} ({cut(one_line(problem), 160)}), allowed well-formed YAML "
                           f"with standard tags only (no !!python)") from None
     except RecursionError:   # pragma: no cover - the depth check comes first
         raise ConfigError(f"{source}: got YAML nested too deep, allowed at most {MAX_YAML_DEPTH} "
                           f"nested mappings and lists") from None
-
-
-def _cut(text: str, limit: int = 160) -> str:
-    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def read_yaml_file(path, what: str = "config"):
@@ -200,7 +184,7 @@ def read_yaml_file(path, what: str = "config"):
         raise ConfigError(out_of_range(what, str(path), f"a readable UTF-8 YAML file "
                                        f"({type(exc).__name__})")) from None
     if len(raw) > MAX_YAML_BYTES:
-        raise ConfigError(f"{what}: got {short_value(str(path))}, a file of more than {MAX_YAML_BYTES} bytes, "
+        raise ConfigError(f"{what}: got {short_repr(str(path), 60)}, a file of more than {MAX_YAML_BYTES} bytes, "
                           f"allowed at most {MAX_YAML_BYTES} bytes of YAML (docs/limits.md)")
     try:
         text = raw.decode("utf-8")
@@ -211,7 +195,3 @@ def read_yaml_file(path, what: str = "config"):
     if data is None:
         raise ConfigError(out_of_range(what, f"{path} (empty)", "a mapping with name, body, walk"))
     return data
-
-
-def short_value(value, limit: int = 60) -> str:
-    return short_repr(value, limit)

@@ -66,10 +66,10 @@ class ConvergenceError(KlawError, RuntimeError):
 
     def as_dict(self) -> dict:
         """The failure as summary.json records it (``message``: the solver's own words)."""
-        return {"step": int(self.step), "subphase": str(self.subphase), "residual": _finite(self.residual),
+        return {"step": int(self.step), "subphase": str(self.subphase), "residual": finite_real(self.residual),
                 "cause": self.cause, "message": self.detail,
                 "iterations": None if self.iterations is None else int(self.iterations),
-                "path_min": _finite(self.path_min), "nlp": self.nlp}
+                "path_min": finite_real(self.path_min), "nlp": self.nlp}
 
 
 #: the margin below which a path constraint counts as violated (the solvers' own)
@@ -81,7 +81,6 @@ def failure_cause(residual: float, message: str = "", iterations: int | None = N
                   max_iterations: int | None = None) -> str:
     """Classify a failed subphase solve from what its solution reports (see
     :attr:`ConvergenceError.cause`); the solvers' behaviour is not changed by it."""
-    import math
     if iterations is None and path_min is None and not nlp:
         return message or "final conditions not met"
     causes = []
@@ -102,11 +101,6 @@ def failure_cause(residual: float, message: str = "", iterations: int | None = N
     if not causes:
         causes.append(f"final conditions not met (residual {residual:.3g})")
     return "; ".join(causes)
-
-
-def _finite(value):
-    import math
-    return float(value) if value is not None and math.isfinite(float(value)) else None
 
 
 class Interrupted(KeyboardInterrupt):
@@ -148,8 +142,35 @@ def short_repr(value, limit: int = MAX_QUOTED) -> str:
         text = f"<an integer of {value.bit_length()} bits>" if isinstance(value, int) else f"<{type(value).__name__}>"
     except Exception:  # noqa: BLE001 - a value whose repr fails is still reported
         text = f"<{type(value).__name__}>"
-    text = " ".join(text.split())
+    return cut(one_line(text), limit)
+
+
+def one_line(text) -> str:
+    """``str(text)`` with every run of white space (newlines too) folded into one space."""
+    return " ".join(str(text).split())
+
+
+def cut(text: str, limit: int) -> str:
+    """``text`` if it has at most ``limit`` characters, else its first ``limit - 1`` and "…"."""
     return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+#: The longest key a field path names (characters); longer ones are cut with "…".
+MAX_PATH_KEY = 40
+
+
+def field_path(parts) -> str:
+    """A config field as messages name it, from its keys and list indices:
+    ``walk.schedule[2].speed``; each key cut to MAX_PATH_KEY characters (one that is not a string
+    by its :func:`short_repr`); ``config`` for the document itself."""
+    out = ""
+    for part in parts:
+        if isinstance(part, int) and not isinstance(part, bool):
+            out += f"[{part}]"
+        else:
+            text = cut(part if isinstance(part, str) else short_repr(part, MAX_PATH_KEY), MAX_PATH_KEY)
+            out += f".{text}" if out else text
+    return out or "config"
 
 
 def out_of_range(field: str, value, allowed: str) -> str:

@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, out_of_range
+from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, finite_real, one_line, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
 
@@ -106,7 +106,7 @@ def expand(config, vary: dict, methods=None) -> tuple[str, list[dict]]:
 
 
 def _prefixed(exc: KlawError, label: str) -> KlawError:
-    message = f"{label}: {' '.join(str(exc).split())}"
+    message = f"{label}: {one_line(exc)}"
     try:
         return type(exc)(message)
     except TypeError:
@@ -140,7 +140,7 @@ def run_walk(mapping: dict, method: str) -> dict:
         except ConvergenceError as err:
             walk = err.partial
             row.update(status="failed", failed_step=int(err.step), failed_subphase=str(err.subphase),
-                       residual=_float(err.residual), message=_one_line(err))
+                       residual=finite_real(err.residual), message=_one_line(err))
         except Exception as exc:  # noqa: BLE001 - any other failure is this walk's, not the sweep's
             walk = None
             row.update(status="error", message=_one_line(exc, type(exc).__name__))
@@ -164,7 +164,7 @@ def _walk_metrics(walk, keep_residual: bool) -> dict:
     subs = [(entry.get("index", k), s) for k, entry in enumerate(summary["steps"]) for s in entry["subphases"]]
     residuals = [s["residual"] for _, s in subs if s.get("residual") is not None]
     out = {"steps": len(walk.steps), "iterations": int(sum(s.get("iterations", 0) for _, s in subs)),
-           "mean_speed_kmh": _float(summary.get("mean_hip_speed_kmh")),
+           "mean_speed_kmh": finite_real(summary.get("mean_hip_speed_kmh")),
            "build_s": float(sum(s.get("build_s", 0.0) for _, s in subs)),
            "max_subphase_s": float(max((s.get("wall_s", 0.0) for _, s in subs), default=0.0)),
            "fallbacks": ";".join(f"step{k}.{s['name']}:{f.get('name') if isinstance(f, dict) else f}"
@@ -179,12 +179,8 @@ def _walk_metrics(walk, keep_residual: bool) -> dict:
     return out
 
 
-def _float(value):
-    return float(value) if value is not None and math.isfinite(float(value)) else None
-
-
 def _one_line(exc: BaseException, prefix: str = "") -> str:
-    text = " ".join(str(exc).split())
+    text = one_line(exc)
     return f"{prefix}: {text}" if prefix and text else (text or prefix)
 
 
@@ -225,9 +221,9 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     method name, "both" or a sequence. ``workers`` (default ``os.cpu_count()``) local processes,
     1 = in this process; ``scheduler`` a dask.distributed address (``workers`` is then the
     cluster's business). Every combination is validated first. Returns one row per walk and
-    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(rows)``, if
-    given, is called after each walk with the rows finished so far (in grid order): ``klaw-ocp
-    sweep`` rewrites sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
+    method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(row)``, if
+    given, is called after each walk with its row, in the order the walks finish: ``klaw-ocp
+    sweep`` appends it to sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
     ``partial`` is the rows finished (the walks running in local workers are waited for).
     """
     _, tasks = expand(config, vary, methods)
@@ -245,7 +241,7 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
         results[i] = row
         bar.update()
         if on_row is not None:
-            on_row(finished())
+            on_row({**tasks[i]["values"], **row})
 
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:
@@ -310,13 +306,16 @@ def _cell(value) -> str:
     return format_value(value)
 
 
-def sweep_csv(rows: list[dict], varied_paths: list[str]) -> str:
+def sweep_csv(rows: list[dict], varied_paths: list[str], header: bool = True) -> str:
+    """``sweep.csv``: the header and one line per row; without ``header`` only the lines, which
+    :func:`append_sweep_row` adds to the file."""
     import csv
     import io
 
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow([*varied_paths, *RESULT_COLUMNS])
+    if header:
+        writer.writerow([*varied_paths, *RESULT_COLUMNS])
     for row in rows:
         writer.writerow([_cell(row.get(c)) for c in (*varied_paths, *RESULT_COLUMNS)])
     return buffer.getvalue()
@@ -332,6 +331,28 @@ def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = Non
     atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
     write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
     return paths
+
+
+def append_sweep_row(path, row: dict, varied_paths) -> None:
+    """Add ``row``'s line to the sweep.csv at ``path`` (with its header), or write the file with
+    the header and that line when there is none yet.
+
+    Why appending is safe: the first line and the header go in together, atomically, so the file
+    is never without its header; each later line is one write, flushed and fsynced before the
+    next walk's, so a finished walk is on the disk once its row is (a crash can at worst cut the
+    line being written, never an earlier one). The lines are in the order the walks finished;
+    ``klaw-ocp sweep`` writes the file again, atomically and in grid order, when the sweep ends
+    (:func:`write_sweep`) or is interrupted."""
+    from .io.writers import atomic_write_text
+
+    path = Path(path)
+    if not path.is_file():
+        atomic_write_text(path, sweep_csv([row], list(varied_paths)))
+        return
+    with open(path, "a", encoding="utf-8", newline="") as handle:
+        handle.write(sweep_csv([row], list(varied_paths), header=False))
+        handle.flush()
+        os.fsync(handle.fileno())
 
 
 def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:

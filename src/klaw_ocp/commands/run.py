@@ -24,6 +24,7 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
+from ..errors import one_line
 from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
 from ._common import add_set_option, check_output_dir, check_plots, load, resolved_header
 
@@ -158,7 +159,7 @@ def keeping(staged, what):
         from ..io.results_folder import kept_phrase
         kept = staged.keep()
         where = kept_phrase(kept, staged) if kept is None else f"{what()} {kept_phrase(kept, staged)}"
-        text = " ".join(str(exc).split())[:200]
+        text = one_line(exc)[:200]
         print(f"{PROG}: error: unexpected {type(exc).__name__}" + (f" ({text})" if text else "") + f"; {where}",
               file=sys.stderr)
         raise
@@ -180,7 +181,7 @@ def report_unfinished(staged, outcome: str, failure, what: str) -> int:
 def failure_sentence(failure) -> str:
     """A ConvergenceError in words: its step, subphase and residual, then its real cause."""
     if isinstance(failure, str) or not hasattr(failure, "cause"):
-        return " ".join(str(failure).split())
+        return one_line(failure)
     where = f"{failure.where}: " if failure.where else ""
     return (f"{where}step {failure.step}, subphase {failure.subphase!r}: did not converge "
             f"(residual {failure.residual:.3g}): {failure.cause}")

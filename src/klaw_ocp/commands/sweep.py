@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from pathlib import Path
 
 from ..errors import ConfigError
 from . import EXIT_OK, EXIT_SOLVER_FAILED, PROG
@@ -44,7 +45,8 @@ def handle(args: argparse.Namespace) -> int:
     from ..errors import Interrupted
     from ..io.results_folder import StagedFolder
     from ..io.writers import atomic_write_text
-    from ..sweep import counts, default_out_dir, parse_vary, run_sweep, summary_line, sweep_csv, write_sweep
+    from ..sweep import (append_sweep_row, counts, default_out_dir, parse_vary, run_sweep, summary_line,
+                         sweep_csv, write_sweep)
 
     vary: dict[str, list] = {}
     for text in args.vary:
@@ -56,10 +58,14 @@ def handle(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out if args.out is not None else default_out_dir(args.config), "--out")
     staged = StagedFolder(out, "sweep", force=args.force)       # refused here, before any walk
 
-    def on_row(rows):          # sweep.csv grows walk by walk (the staging folder opens with the first)
-        if staged.path is None:
-            staged.open()
-        atomic_write_text(staged.path / "sweep.csv", sweep_csv(rows, list(vary)), durable=False)
+    def staging() -> Path:     # the staging folder opens with the first finished walk
+        return staged.path if staged.path is not None else staged.open()
+
+    def on_row(row):
+        # sweep.csv grows walk by walk, one appended line each (rewriting the whole file after
+        # every walk cost time growing with the square of the walks); append_sweep_row says why
+        # no finished walk is lost
+        append_sweep_row(staging() / "sweep.csv", row, list(vary))
 
     with keeping(staged, lambda: "the walks finished so far"):
         try:
@@ -67,13 +73,11 @@ def handle(args: argparse.Namespace) -> int:
                              scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),
                              on_row=on_row)
         except Interrupted as exc:
-            if exc.partial:
-                on_row(exc.partial)
+            if exc.partial:        # the finished walks again, atomically and in grid order
+                atomic_write_text(staging() / "sweep.csv", sweep_csv(exc.partial, list(vary)))
             return report_unfinished(staged, "interrupted", None, f"{len(exc.partial)} finished walk(s)")
-        if staged.path is None:
-            staged.open()
         try:
-            write_sweep(rows, list(vary), staged.path, title=f"{PROG} sweep {os.path.basename(args.config)}")
+            write_sweep(rows, list(vary), staging(), title=f"{PROG} sweep {os.path.basename(args.config)}")
         except KeyboardInterrupt:
             return report_unfinished(staged, "interrupted", None, f"all {len(rows)} walks (sweep.png not drawn)")
     staged.commit()

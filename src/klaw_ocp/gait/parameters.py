@@ -104,9 +104,9 @@ def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequ
     if v_kmh is None and sl is None and sf is None:
         raise ConfigError(out_of_range(field_prefix, "no locomotion parameter",
                                        "at least one of speed, step_length, step_frequency"))
-    h = body.height
     v = None if v_kmh is None else v_kmh * KMH_TO_M_PER_MIN  # m/min
     given = {f_v: v is not None, f_sl: sl is not None, f_sf: sf is not None}
+    fields = (f_v, f_sl, f_sf)
 
     if v is not None and sl is not None and sf is not None:
         mismatch = abs(sl * sf - v) / v
@@ -117,44 +117,43 @@ def complete_parameters(body: Body, speed_kmh=None, step_length=None, step_frequ
                 f"{sf:g} steps/min, which disagree (sl·sf = {sl * sf / KMH_TO_M_PER_MIN:.4g} km/h, "
                 f"{100 * mismatch:.3g} % off), allowed a mismatch of at most {100 * tol:g} % "
                 f"(attributes.parameter_consistency_tolerance)")
-        v = sl * sf
-    # the values typed, as typed, first: then the completion below stays within floats
-    # (5e-324 km/h would give sl = 0 and 1e308 km/h an infinite v)
-    typed = {f_v: v_kmh, f_sl: sl, f_sf: sf}
-    _check_limits(body, None, attrs, given, (f_v, f_sl, f_sf), typed)
-    if v is not None and sl is not None and sf is not None:
-        pass                            # all three: v = sl·sf above
-    elif v is not None and sl is not None:
-        sf = v / sl
-    elif v is not None and sf is not None:
-        sl = v / sf
-    elif sl is not None and sf is not None:
-        v = sl * sf
-    elif v is not None:
-        sl = natural_step_length(h, v)  # eq. 1, right-hand form
-        sf = v / sl
-    elif sl is not None:
-        sf = sl / (NORMALIZING_CONSTANT * h)
-        v = sl * sf
-    else:
-        sl = NORMALIZING_CONSTANT * h * sf
-        v = sl * sf
-
+    # the values as typed first (1e308 km/h is reported as such, not as the infinity its m/min
+    # overflows to): then the completion below stays within floats (5e-324 km/h would give
+    # sl = 0 and 1e308 km/h an infinite v)
+    _check_limits(body, attrs, given, fields, {f_v: v_kmh, f_sl: sl, f_sf: sf})
+    v, sl, sf = _completed(body.height, v, sl, sf)
     params = LocomotionParameters(speed_kmh=v / KMH_TO_M_PER_MIN, step_length_m=sl,
                                   step_frequency_spm=sf)
-    _check_limits(body, params, attrs, given, (f_v, f_sl, f_sf))
+    _check_limits(body, attrs, given, fields, {f_v: params.speed_kmh, f_sl: params.step_length_m,
+                                               f_sf: params.step_frequency_spm})
     return params
 
 
-def _check_limits(body: Body, p: LocomotionParameters | None, attrs: LocomotionAttributes,
-                  given: dict[str, bool], fields: tuple[str, str, str], typed: dict | None = None) -> None:
-    """Raise GaitLimitError for the first value outside its limits, user-given values first,
-    checked as typed (1e308 km/h is reported as such, not as the infinity its m/min overflows
-    to). With ``p`` None only the typed values are checked."""
+def _completed(h: float, v, sl, sf) -> tuple[float, float, float]:
+    """(v in m/min, sl, sf) from those given (the others None) and eq. 1 for body height ``h``;
+    with all three given, v = sl·sf (sl and sf are what the step constraints use)."""
+    if sl is not None and sf is not None:
+        return sl * sf, sl, sf
+    if v is not None and sl is not None:
+        return v, sl, v / sl
+    if v is not None and sf is not None:
+        return v, v / sf, sf
+    if v is not None:
+        sl = natural_step_length(h, v)  # eq. 1, right-hand form
+        return v, sl, v / sl
+    if sl is not None:
+        sf = sl / (NORMALIZING_CONSTANT * h)
+        return sl * sf, sl, sf
+    sl = NORMALIZING_CONSTANT * h * sf
+    return sl * sf, sl, sf
+
+
+def _check_limits(body: Body, attrs: LocomotionAttributes, given: dict[str, bool],
+                  fields: tuple[str, str, str], values: dict) -> None:
+    """Raise GaitLimitError for the first of ``values`` (field -> value, None for none) outside
+    its limits, user-given values first."""
     f_v, f_sl, f_sf = fields
     l1 = body.l1
-    values = ({f_v: None, f_sl: None, f_sf: None} if p is None else
-              {f_v: p.speed_kmh, f_sl: p.step_length_m, f_sf: p.step_frequency_spm})
     checks = [
         (f_v, values[f_v], attrs.speed_min, attrs.speed_max, "km/h", "speed_min/speed_max"),
         (f_sl, values[f_sl], attrs.step_length_min_rel * l1, attrs.step_length_max_rel * l1, "m",
@@ -164,8 +163,6 @@ def _check_limits(body: Body, p: LocomotionParameters | None, attrs: LocomotionA
     # A value the user typed is the likelier culprit, so report it before derived ones.
     checks.sort(key=lambda c: not given[c[0]])
     for field, value, lo, hi, unit, source in checks:
-        if given[field] and typed and typed.get(field) is not None:
-            value = typed[field]
         if value is None:
             continue
         if not lo <= value <= hi:

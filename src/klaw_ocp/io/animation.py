@@ -34,8 +34,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
-from ..body import Body
-from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
+from ..kinematics.skeleton import SIDES
+from .body_plots import CHAINS, chain_points, has_angles, skeleton_at
 from .gait_diagram import gait_events
 from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, PaletteWriter, StaticText
 from .plot_style import LEG_COLOURS, add_axes_in, new_figure
@@ -56,26 +56,7 @@ PLAN_BEHIND_M, PLAN_AHEAD_M = 1.55, 0.75   # ... and x from the pelvis back and 
 GROUND_LOW_M = -0.17             # room below the ground for the tick labels
 FOOTPRINT = {"lw": 4.0, "alpha": 0.55}
 
-_SPINE = ("pelvis", "L5", "L3", "L1", "T12", "T6", "T1", "C7", "C4", "C1")
 _FAINT_SIDE = {"left": 0.55, "right": 1.0}       # side view: the left side is the far one
-
-
-def _leg(s):
-    return [("joint", f"{s}_hip"), ("joint", f"{s}_knee"), ("joint", f"{s}_ankle"), ("landmark", f"{s}_heel"),
-            ("joint", f"{s}_toes"), ("end", f"{s}_toes")]
-
-
-#: the polylines of the stick figure (the points of body_plots._chains, plus the pelvis for the front
-#: view): name -> (colour key, points); a point is (kind, name), kind "joint", "landmark" or "end" (site)
-CHAINS = {
-    "spine": ("trunk", [("joint", j) for j in _SPINE]),
-    "shoulders": ("trunk", [("joint", "r_shoulder"), ("joint", "T1"), ("joint", "l_shoulder")]),
-    "pelvis": ("trunk", [("joint", "r_hip"), ("joint", "pelvis"), ("joint", "l_hip")]),
-    **{f"{side}_leg": (side, _leg(s)) for s, side in SIDES},
-    **{f"{side}_foot": (side, [("joint", f"{s}_ankle"), ("joint", f"{s}_toes")]) for s, side in SIDES},
-    **{f"{side}_arm": (side, [("joint", f"{s}_shoulder"), ("joint", f"{s}_elbow"), ("end", f"{s}_elbow")])
-       for s, side in SIDES},
-}
 
 
 @dataclass(frozen=True)
@@ -88,37 +69,11 @@ class Footprint:
     toe: np.ndarray
 
 
-def has_animation_data(run) -> bool:
-    """Whether ``run`` has a body to animate: a completed step and two frames of angles."""
-    return bool(run.steps) and run.angles is not None and len(run.angles["time"]) > 1
-
-
 def gif_times(run, fps: float = GIF_FPS) -> np.ndarray:
     """Walk time of every GIF frame: k / fps (k = 0, 1, ...) from the walk's first heel strike to
     its end, whatever the frame rate of angles.csv (a frame after its last one holds that pose)."""
     start = float(run.steps[0]["t_start_s"])
     return start + np.arange(int(np.floor(run.duration * fps + 1e-9)) + 1) / fps
-
-
-def skeleton_at(run, times):
-    """The skeleton (skeleton.SkeletonFrames) at walk times ``times``: the root and the angles
-    interpolated linearly between the frames of angles.csv (degrees, as in the file)."""
-    a, times = run.angles, np.clip(np.atleast_1d(np.asarray(times, float)), run.angles["time"][0],
-                                   run.angles["time"][-1])
-    root = np.column_stack([np.interp(times, a["time"], a[f"root_{axis}"]) for axis in "xyz"])
-    angles = np.radians(np.column_stack([np.interp(times, a["time"], a[name]) for name in ANGLE_NAMES]))
-    return forward_kinematics(Body(height=run.body["height"], mass=run.body["mass"]), root, angles)
-
-
-def _point(skeleton, kind: str, name: str) -> np.ndarray:
-    if kind == "joint":
-        return skeleton.position(name)
-    return (skeleton.landmarks if kind == "landmark" else skeleton.end_sites)[name]
-
-
-def chain_points(skeleton) -> dict:
-    """CHAINS name -> (n, k, 3): each polyline's points at every frame of ``skeleton``."""
-    return {name: np.stack([_point(skeleton, *p) for p in points], axis=1) for name, (_, points) in CHAINS.items()}
 
 
 def _events(run) -> list[tuple[float, str, str]]:
@@ -368,7 +323,7 @@ class Animation:
 def write_animation(run, path, fps: float = GIF_FPS) -> Path | None:
     """Render ``run``'s walk.gif to ``path`` atomically (a temporary file in the same folder, then
     a rename; the user's normal file mode); None, writing nothing, if it has no body to animate."""
-    if not has_animation_data(run):
+    if not has_angles(run):
         return None
     path = Path(path)
     animation = animation_figure(run, fps)

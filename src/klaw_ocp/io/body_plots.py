@@ -21,7 +21,6 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 from matplotlib.ticker import MultipleLocator
 
-from ..body import Body
 from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
 from .gait_diagram import gait_events
 from .plot_style import FONT_PT, LEG_COLOURS, add_axes_in, new_figure, style_axes
@@ -35,6 +34,53 @@ MAX_POSTURES = 8              # body.png draws at most this many heel strikes, e
 POSTURE_HALF_WIDTH_M = 0.75   # each posture's panel spans the pelvis x ± this
 MODEL_COLOUR = "#000000"
 
+# -- the stick figure, shared with walk.gif (:mod:`klaw_ocp.io.animation`) ----------------------------
+SPINE = ("pelvis", "L5", "L3", "L1", "T12", "T6", "T1", "C7", "C4", "C1")
+
+
+def _leg(s):
+    return [("joint", f"{s}_hip"), ("joint", f"{s}_knee"), ("joint", f"{s}_ankle"), ("landmark", f"{s}_heel"),
+            ("joint", f"{s}_toes"), ("end", f"{s}_toes")]
+
+
+#: the polylines of the stick figure: name -> (colour key, points); a point is (kind, name), kind
+#: "joint", "landmark" or "end" (site). The pelvis (hip to hip) is drawn only from the front.
+CHAINS = {
+    "spine": ("trunk", [("joint", j) for j in SPINE]),
+    "shoulders": ("trunk", [("joint", "r_shoulder"), ("joint", "T1"), ("joint", "l_shoulder")]),
+    "pelvis": ("trunk", [("joint", "r_hip"), ("joint", "pelvis"), ("joint", "l_hip")]),
+    **{f"{side}_leg": (side, _leg(s)) for s, side in SIDES},
+    **{f"{side}_foot": (side, [("joint", f"{s}_ankle"), ("joint", f"{s}_toes")]) for s, side in SIDES},
+    **{f"{side}_arm": (side, [("joint", f"{s}_shoulder"), ("joint", f"{s}_elbow"), ("end", f"{s}_elbow")])
+       for s, side in SIDES},
+}
+
+
+def has_angles(run) -> bool:
+    """Whether ``run`` has a body to draw: a completed step and two frames of angles."""
+    return bool(run.steps) and run.angles is not None and len(run.angles["time"]) > 1
+
+
+def skeleton_at(run, times):
+    """The skeleton (skeleton.SkeletonFrames) at walk times ``times``: the root and the angles
+    interpolated linearly between the frames of angles.csv (degrees, as in the file)."""
+    a, times = run.angles, np.clip(np.atleast_1d(np.asarray(times, float)), run.angles["time"][0],
+                                   run.angles["time"][-1])
+    root = np.column_stack([np.interp(times, a["time"], a[f"root_{axis}"]) for axis in "xyz"])
+    angles = np.radians(np.column_stack([np.interp(times, a["time"], a[name]) for name in ANGLE_NAMES]))
+    return forward_kinematics(run.body_model(), root, angles)
+
+
+def _point(skeleton, kind: str, name: str) -> np.ndarray:
+    if kind == "joint":
+        return skeleton.position(name)
+    return (skeleton.landmarks if kind == "landmark" else skeleton.end_sites)[name]
+
+
+def chain_points(skeleton) -> dict:
+    """CHAINS name -> (n, k, 3): each polyline's points at every frame of ``skeleton``."""
+    return {name: np.stack([_point(skeleton, *p) for p in points], axis=1) for name, (_, points) in CHAINS.items()}
+
 
 def _note(text: str):
     fig = new_figure(8.0, 3.0)
@@ -42,10 +88,6 @@ def _note(text: str):
     ax.text(0.5, 0.5, text, ha="center", va="center", fontsize=FONT_PT + 2)
     ax.set_axis_off()
     return fig
-
-
-def _has_angles(run) -> bool:
-    return bool(run.steps) and run.angles is not None and len(run.angles["time"]) > 1
 
 
 def gait_cycles(run, side: str) -> list[tuple[float, float, float | None]]:
@@ -86,7 +128,7 @@ def _grid(fig, rows: int, columns: int, width: float, height: float, left: float
 
 def joint_angles_figure(run):
     """``joint_angles.png``: hip, knee and ankle of both legs over the normalised gait cycle."""
-    if not _has_angles(run):
+    if not has_angles(run):
         return _note(f"{run.name}: no angles.csv (no completed step, or written before it), no joint angles")
     percent = np.linspace(0.0, 100.0, CYCLE_POINTS)
     fig = new_figure(10.5, 7.4, layout=None)
@@ -142,38 +184,22 @@ def step_heel_strikes(run) -> list[tuple[float, str]]:
     return [(t, leg) for leg, kind, t in gait_events(run) if kind == "heel_strike" and t in starts]
 
 
-def _skeleton_at(run, t: float):
-    """The skeleton (skeleton.SkeletonFrames, one frame) at walk time ``t``, its root and angles
-    interpolated linearly between the frames of angles.csv around it."""
-    a = run.angles
-    root = np.array([[np.interp(t, a["time"], a[f"root_{axis}"]) for axis in "xyz"]])
-    angles = np.radians([[np.interp(t, a["time"], a[name]) for name in ANGLE_NAMES]])
-    return forward_kinematics(Body(height=run.body["height"], mass=run.body["mass"]), root, angles)
+#: the side view's polylines per colour key, from the CHAINS of :func:`chain_points` (the pelvis,
+#: hip to hip, shows only from the front): body.png draws each key's in this order
+_SIDE_VIEW = {"trunk": ("spine", "shoulders"),
+              **{side: (f"{side}_leg", f"{side}_arm", f"{side}_foot") for _, side in SIDES}}
 
 
-def _chains(skeleton) -> dict:
+def _side_view_chains(skeleton) -> dict:
     """colour key -> polylines (each (k, 2), side view x-y) of one skeleton frame: each leg with its
     foot, each arm from the shoulder line, and the trunk from the pelvis to the top of the head."""
-    def xy(name):
-        return skeleton.position(name)[0, :2]
-
-    def site(kind, name):
-        return getattr(skeleton, kind)[name][0, :2]
-    spine = ["pelvis", "L5", "L3", "L1", "T12", "T6", "T1", "C7", "C4", "C1"]
-    chains = {"trunk": [np.array([xy(j) for j in spine]),
-                        np.array([xy("r_shoulder"), xy("T1"), xy("l_shoulder")])]}
-    for s, side in SIDES:
-        leg = [xy(f"{s}_hip"), xy(f"{s}_knee"), xy(f"{s}_ankle"), site("landmarks", f"{s}_heel"),
-               xy(f"{s}_toes"), site("end_sites", f"{s}_toes")]
-        arm = [xy(f"{s}_shoulder"), xy(f"{s}_elbow"), site("end_sites", f"{s}_elbow")]
-        foot = [xy(f"{s}_ankle"), xy(f"{s}_toes")]
-        chains[side] = [np.array(leg), np.array(arm), np.array(foot)]
-    return chains
+    points = chain_points(skeleton)
+    return {key: [points[name][0, :, :2] for name in names] for key, names in _SIDE_VIEW.items()}
 
 
 def draw_skeleton(ax, skeleton, lw: float = 2.6) -> None:
     """One skeleton frame side on: the left side (the far one, z < 0) first and fainter."""
-    chains = _chains(skeleton)
+    chains = _side_view_chains(skeleton)
     for key, alpha, z in (("left", 0.55, 3), ("trunk", 0.8, 4), ("right", 1.0, 5)):
         colour = TRUNK_COLOUR if key == "trunk" else LEG_COLOURS[key]
         ax.add_collection(LineCollection(chains[key], colors=colour, lw=lw, alpha=alpha, zorder=z,
@@ -187,7 +213,7 @@ def draw_skeleton(ax, skeleton, lw: float = 2.6) -> None:
 def body_figure(run):
     """``body.png``: the skeleton from angles.csv at up to MAX_POSTURES heel strikes that open steps,
     each with the dynamic model at the same instant drawn over it in thin black."""
-    strikes = step_heel_strikes(run) if _has_angles(run) else []
+    strikes = step_heel_strikes(run) if has_angles(run) else []
     if not strikes:
         return _note(f"{run.name}: no angles.csv (no completed step, or written before it) or no heel strike, no body")
     chosen = sorted(set(np.linspace(0, len(strikes) - 1, min(MAX_POSTURES, len(strikes))).round().astype(int)))
@@ -201,7 +227,7 @@ def body_figure(run):
     axes = _grid(fig, rows, columns, panel_w, panel_h, 0.55, 0.95, 0.35, 0.62).ravel()
     for ax, index in zip(axes, chosen):
         t, leg = strikes[index]
-        skeleton = _skeleton_at(run, t)
+        skeleton = skeleton_at(run, [t])
         centre = float(skeleton.position("pelvis")[0, 0])
         style_axes(ax)
         draw_ground(ax, centre - POSTURE_HALF_WIDTH_M, centre + POSTURE_HALF_WIDTH_M)

@@ -43,7 +43,7 @@ import numpy as np
 from ..body import Body
 from ..kinematics.skeleton import (ANGLE_NAMES, JOINTS, end_site_offsets, rest_offsets,
                                    rest_root_position)
-from .fixed_text import fixed_decimals_text
+from .fixed_text import fixed_decimals_rows
 from .writers import atomic_write_text
 
 #: The file ``klaw-ocp run`` writes.
@@ -82,7 +82,7 @@ def _table_and_body(motion, body) -> tuple[dict, Body]:
         if motion.angles is None:
             raise ValueError(f"motion: the run {motion.name!r} has no angles (a results folder written "
                              f"before angles.csv was)")
-        table, body = motion.angles, motion.body if body is None else body
+        table, body = motion.angles, motion.body_model() if body is None else body
     elif hasattr(motion, "table") and callable(motion.table):     # kinematics.body_motion.BodyMotion
         table = motion.table()
     elif isinstance(motion, dict):
@@ -186,13 +186,7 @@ def bvh_text(motion, body=None, fps: float | None = None) -> str:
     rate = _frame_rate(np.asarray(table["time"], dtype=float), fps)
     # "%.17g": 1/30 s reads back as the double nearest 1/30 (Blender: 30 fps, fps_base 1)
     header = f"MOTION\nFrames: {len(values)}\nFrame Time: {1.0 / rate:.17g}\n"
-    # rounded first and + 0.0: no "-0.000000000" in the file
-    rounded = np.round(values, DECIMALS) + 0.0
-    frames = fixed_decimals_text(rounded, DECIMALS, " ") if len(values) else ""
-    if frames is None:                 # a value too large for the fast form: a format per row
-        row = " ".join([f"%.{DECIMALS}f"] * values.shape[1])
-        frames = "\n".join(row % tuple(v) for v in rounded.tolist()) + "\n"
-    return hierarchy_text(body) + header + frames
+    return hierarchy_text(body) + header + fixed_decimals_rows(values, DECIMALS, " ")
 
 
 def write_bvh(path, motion, body=None, fps: float | None = None) -> Path:

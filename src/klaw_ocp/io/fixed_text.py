@@ -12,7 +12,8 @@ Why the characters are the same: the callers round first (``np.round(values, d) 
 value v is the double nearest to k·10⁻ᵈ, k = rint(v·10ᵈ). While |v|·10ᵈ < 2⁴⁹ both the product's
 rounding (< 0.25) and the distance of v from k·10⁻ᵈ (half an ulp of v, < 0.07·10⁻ᵈ) are too small
 to reach another k or another d-decimal text, so ``"%.{d}f" % v`` is k's digits. Larger or
-non-finite values return None, and the caller formats them as before.
+non-finite values return None; :func:`fixed_decimals_rows`, which the writers call, then formats
+them with ``%`` one row at a time.
 """
 from __future__ import annotations
 
@@ -73,3 +74,19 @@ def fixed_decimals_text(rounded: np.ndarray, decimals: int, separator: str) -> s
     # the separator in the last slot's free fourth byte (little-endian: the highest)
     slots[..., -1] |= ends << 24
     return slots.tobytes().translate(None, b"\0").decode("ascii")     # bytes' C loop drops the zeros
+
+
+def fixed_decimals_rows(values, decimals: int, separator: str) -> str:
+    """The rows of ``values`` (n, c) as text: each value rounded to ``decimals`` and written as
+    ``"%.{decimals}f"``, joined by ``separator``, every row ending in a newline ("" for no rows).
+    Rounded first and + 0.0, so that a value a hair below zero is written 0, not -0; the numpy
+    form of :func:`fixed_decimals_text` where it holds, else a ``%`` format per row (a value too
+    large for it, or not finite)."""
+    rounded = np.round(np.asarray(values, float), decimals) + 0.0
+    if not len(rounded):
+        return ""
+    text = fixed_decimals_text(rounded, decimals, separator)
+    if text is None:
+        row = separator.join([f"%.{decimals}f"] * rounded.shape[1])
+        text = "\n".join(row % tuple(v) for v in rounded.tolist()) + "\n"
+    return text

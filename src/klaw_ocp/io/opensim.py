@@ -40,7 +40,7 @@ import numpy as np
 from ..body import Body
 from ..kinematics.skeleton import (ANGLE_NAMES, LUMBAR, THORACIC, frames_array, joint_index,
                                    local_rotations, rest_root_position, zxy_angles)
-from .fixed_text import fixed_decimals_text
+from .fixed_text import fixed_decimals_rows
 from .writers import atomic_write_bytes
 
 #: The results file's name.
@@ -139,15 +139,7 @@ def mot_text(table: dict, body: Body, model_scale: float = 1.0, name: str = "wal
     title = " ".join(str(name).split()) or "walk"
     head = (f"{title}\nversion=1\nnRows={n}\nnColumns={len(MOT_COLUMNS)}\ninDegrees=yes\nendheader\n"
             + "\t".join(MOT_COLUMNS) + "\n")
-    if not n:
-        return head
-    # rounded first, + 0.0: a value a hair below zero is written 0, not -0
-    rounded = np.column_stack([np.round(columns[c], MOT_DECIMALS) + 0.0 for c in MOT_COLUMNS])
-    rows = fixed_decimals_text(rounded, MOT_DECIMALS, "\t")
-    if rows is None:                   # a value too large for the fast form: a format per row
-        row = "\t".join([f"%.{MOT_DECIMALS}f"] * len(MOT_COLUMNS))
-        rows = "\n".join(row % tuple(v) for v in rounded.tolist()) + "\n"
-    return head + rows
+    return head + fixed_decimals_rows(np.column_stack([columns[c] for c in MOT_COLUMNS]), MOT_DECIMALS, "\t")
 
 
 def render_mot(table: dict, body: Body, model_scale: float = 1.0, name: str = "walk") -> bytes:

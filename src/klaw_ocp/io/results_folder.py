@@ -169,21 +169,22 @@ def _deferred_interrupt():
 
 class StagedFolder:
     """The results folder ``out`` of ``command``, checked now, written beside it, swapped in at
-    the end (see the module docstring). ``what`` names the option in a refusal."""
+    the end (see the module docstring). A refusal names ``--out``, the option of every command
+    that writes one."""
 
-    def __init__(self, out, command: str, force: bool = False, what: str = "--out"):
+    def __init__(self, out, command: str, force: bool = False):
         if command not in OUTPUTS:
             raise ValueError(f"unknown command {command!r}")
         self.out, self.command, self.force = Path(out), command, force
         # a symlinked --out: the folder it points to is the one replaced
         self.target = Path(os.path.realpath(self.out))
         if not self.target.name:
-            raise OutputFolderError(f"{what}: got {str(out)!r}, allowed a folder below the file system's root")
+            raise OutputFolderError(f"--out: got {str(out)!r}, allowed a folder below the file system's root")
         self.state, why = inspect_folder(self.target, command)
         if self.state == "foreign" and not self.target.is_dir():
-            raise OutputFolderError(f"{what}: got {str(out)!r}, a file, allowed a folder")
+            raise OutputFolderError(f"--out: got {str(out)!r}, a file, allowed a folder")
         if self.state == "foreign" and not force:
-            raise OutputFolderError(f"{what}: got {str(out)!r}, a non-empty folder that klaw-ocp {command} "
+            raise OutputFolderError(f"--out: got {str(out)!r}, a non-empty folder that klaw-ocp {command} "
                                     f"did not write ({why}); choose another folder, or add --force to write "
                                     f"into it (its other files are kept)")
         self.path: Path | None = None

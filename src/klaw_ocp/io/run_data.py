@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..body import Body
 from ..errors import ConfigError
 
 SUMMARY_FILE = "summary.json"
@@ -92,6 +93,11 @@ class RunData:
     @property
     def body(self) -> dict:
         return self.summary["body"]
+
+    def body_model(self) -> Body:
+        """The walker's :class:`~klaw_ocp.body.Body`, rebuilt from the summary's height and mass
+        (the rest of the summary's body is derived from them)."""
+        return Body(height=self.body["height"], mass=self.body["mass"])
 
     @property
     def method(self) -> str:
