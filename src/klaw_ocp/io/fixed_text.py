@@ -214,10 +214,12 @@ def shortest_repr_slots(values) -> np.ndarray:
 
 
 def text_slots(texts: list) -> np.ndarray:
-    """ASCII ``texts`` as rows of 4-byte slots (n, s), as :func:`shortest_repr_slots`."""
-    width = 4 * max(1, -(-max(map(len, texts), default=0) // 4))
-    raw = np.frombuffer("".join(t.ljust(width, "\0") for t in texts).encode("ascii"), np.uint8)
-    return raw.view("<u4").reshape(len(texts), -1)
+    """ASCII ``texts`` as rows of 4-byte slots (n, s), as :func:`shortest_repr_slots`; each
+    distinct text packed once (a column of step numbers or subphase names has few)."""
+    codes: dict = {}
+    index = np.array([codes.setdefault(text, len(codes)) for text in texts], np.intp)
+    width = max(1, -(-max(map(len, codes), default=0) // 4))
+    return _slot_table(list(codes), width)[index]
 
 
 def _widened(slots: np.ndarray, width: int) -> np.ndarray:
