@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from klaw_ocp.io.fixed_text import fixed_decimals_rows, fixed_decimals_text
+from klaw_ocp.io.fixed_text import fixed_decimals_rows, fixed_decimals_text, shortest_repr_slots, slots_text, text_slots
 
 
 def _percent_format(rounded, decimals, separator):
@@ -39,3 +39,31 @@ def test_the_writers_rows_round_first_and_fall_back_to_the_percent_format():
     large = np.array([[1e7, -0.5], [np.inf, 1.0]])       # beyond the numpy form: "%" per row
     assert fixed_decimals_rows(large, 9, "\t") == _percent_format(np.round(large, 9) + 0.0, 9, "\t")
     assert fixed_decimals_rows(np.zeros((0, 3)), 9, " ") == ""
+def _repr_rows(values):
+    return "".join(repr(v) + "\n" for v in values.tolist())
+
+
+def test_shortest_repr_slots_are_repr_of_every_value():
+    # dynamics.csv's exact floats (io/fixed_text.py's argument): random bit patterns, values of
+    # every scale, short decimals and their neighbours, powers of ten and two, specials
+    rng = np.random.default_rng(5)
+    n = 20000
+    bits = rng.integers(0, 2 ** 63, n, dtype=np.uint64) | (rng.integers(0, 2, n, dtype=np.uint64) << np.uint64(63))
+    short = np.concatenate([np.round(rng.normal(0, 100, n // 10), d) for d in range(10)])
+    cut = np.array([float(f"{x:.{p}g}") for x, p in zip(rng.normal(0, 10.0 ** rng.uniform(-12, 16, n // 4)),
+                                                        rng.integers(1, 18, n // 4))])
+    samples = [bits.view(np.float64), rng.normal(0, 10.0 ** rng.uniform(-14, 17, n)), short,
+               np.nextafter(short, np.inf), cut, np.nextafter(cut, -np.inf),
+               10.0 ** rng.integers(-15, 18, 2000) * rng.choice([1, -1, 2, 5, 0.5, 1.5, 9.999999999999999], 2000),
+               np.ldexp(1.0, rng.integers(-60, 60, 500)), rng.integers(-10 ** 6, 10 ** 6, n).astype(float),
+               np.array([0.0, -0.0, np.nan, -np.nan, np.inf, -np.inf, 1e-320, 5e-324, 1.7976931348623157e308,
+                         1e-11, 1e15, 0.0001, 1e-05, 1e16, 9999999999999998.0, 0.1, 1 / 3])]
+    for values in samples:
+        assert slots_text([shortest_repr_slots(values)]) == _repr_rows(values)
+
+
+def test_slots_text_joins_cells_and_texts_into_rows():
+    values = np.array([[1.5, -0.0, np.nan], [2e-07, 123456.0, 0.25]])
+    cells = shortest_repr_slots(values).reshape(2, 3, -1)
+    text = slots_text([cells[:, :1], text_slots(["a", "bcdef"]), cells[:, 1:]])
+    assert text == "1.5,a,-0.0,nan\n2e-07,bcdef,123456.0,0.25\n"

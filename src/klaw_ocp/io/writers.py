@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..results import COLUMNS, walk_table
+from .fixed_text import shortest_repr_slots, slots_text, text_slots
 
 #: Significant digits of angles.csv: 1e-10 degrees and 1e-10 m at 10 m, far below any use (an
 #: animation, a gait curve), at a third of the time of writing every float exactly.
@@ -74,14 +75,27 @@ def dynamics_csv(walk, table: dict | None = None, header: bool = True) -> str:
     without ``header`` only the rows, which a run appends step by step (the same bytes)."""
     if table is None:
         table = walk_table(walk) if walk.steps else {c: np.array([]) for c in COLUMNS}
-    # whole columns to text first (indexing numpy cell by cell costs more than the walk), then
-    # joined: no cell needs the csv module's quoting (numbers and subphase names), and it takes
-    # half the time of csv.writer
-    columns = [table[c].tolist() if c == "subphase" else
-               [str(int(v)) for v in table[c].tolist()] if c == "step" else list(map(repr, table[c].tolist()))
-               for c in COLUMNS]
-    lines = ([COLUMNS] if header else []) + list(zip(*columns))
-    return "\n".join(map(",".join, lines)) + "\n" if lines else ""
+    n = len(table[COLUMNS[0]])
+    head = ",".join(COLUMNS) + "\n" if header else ""
+    if not n:
+        return head
+    # every float as its exact shortest repr, built in numpy for all values at once
+    # (io/fixed_text.py: a repr per value was a third of rendering the files); no cell needs the
+    # csv module's quoting (numbers and subphase names)
+    columns, floats = [], []
+    for c in COLUMNS:
+        if c in ("step", "subphase"):
+            columns.append(c)
+        else:
+            floats.append(table[c])
+            if not columns or isinstance(columns[-1], str):
+                columns.append([])
+            columns[-1].append(len(floats) - 1)
+    # the floats in one pass (its fixed cost is a few hundred numpy calls), then cut into runs
+    cells = shortest_repr_slots(np.column_stack(floats)).reshape(n, len(floats), -1)
+    return head + slots_text([text_slots(table[c].tolist()) if c == "subphase" else
+                              text_slots([str(int(v)) for v in table[c].tolist()]) if c == "step" else
+                              cells[:, c[0]:c[-1] + 1] for c in columns])
 
 
 def render_walk(walk, fps: float | None = None) -> dict:
