@@ -25,6 +25,8 @@ frame flickers) and written atomically (a temporary file in the same folder, the
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -113,19 +115,22 @@ def footprints(run) -> list[Footprint]:
         return []
     plants.sort(key=lambda p: p[1])
     skeleton = skeleton_at(run, [flat for _, _, flat in plants])
+    body = run.body_model()
+    length = body.l8 + math.sqrt(body.l12 ** 2 - body.l9 ** 2) + body.l13     # heel to toe tip, flat
     prints = []
     for i, (side, t, _) in enumerate(plants):
-        heel, toe = _laid_flat(skeleton.landmarks[f"{side[0]}_heel"][i], skeleton.end_sites[f"{side[0]}_toes"][i])
+        heel, toe = _laid_flat(skeleton.landmarks[f"{side[0]}_heel"][i], skeleton.end_sites[f"{side[0]}_toes"][i], length)
         prints.append(Footprint(side, float(t), heel, toe))
     return prints
 
 
-def _laid_flat(heel: np.ndarray, toe: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The foot from ``heel`` to ``toe`` (tip) laid flat on the ground (y = 0), in its direction
+def _laid_flat(heel: np.ndarray, toe: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """The foot from ``heel`` to ``toe`` (tip) laid flat on the ground (y = 0), ``length`` long
+    (its toes straight: a walking start's hind foot stands on its bent toes), in its direction
     seen from above, about its lower end (a flat foot stays where it is; a foot on its toes keeps
     its toes, one on its heel its heel)."""
     along = np.array([toe[0] - heel[0], 0.0, toe[2] - heel[2]])
-    along *= float(np.linalg.norm(toe - heel)) / max(float(np.linalg.norm(along)), 1e-12)
+    along *= length / max(float(np.linalg.norm(along)), 1e-12)
     if heel[1] <= toe[1]:
         heel = np.array([heel[0], 0.0, heel[2]])
         return heel, heel + along

@@ -63,14 +63,14 @@ def _rocker_pitch(t, t_flat, p0, rate):
     return np.where(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
 
 
-def _push_line(t, t_push, t_toe_off, start, end, ease):
-    """The push-off's pitch line from ``start`` at t_push to ``end`` at toe-off, eased in over the
-    fraction ``ease`` of it (a cubic with zero start rate, joining the line with its slope)."""
+def _push_through(t, t_push, t_toe_off, ease):
+    """How far along the push-off's line (0 at t_push, 1 at toe-off), eased in over the fraction
+    ``ease`` of it (a cubic with zero start rate, joining the line with its slope)."""
     through = np.clip((t - t_push) / np.maximum(t_toe_off - t_push, 1e-12), 0, 1)
     if np.any(ease > 0):
         s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
         through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
-    return start + (end - start) * through
+    return through
 
 
 def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.ndarray:
@@ -83,8 +83,10 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
         return value[rows] if np.ndim(value) else value
 
     def line(rows):       # (t_push is inf until the double support is known: the line starts at t_step)
-        return _push_line(t[rows], np.minimum(at("t_push", rows), at("t_step", rows)), at("t_toe_off", rows),
-                          at("pitch_ds_start", rows), at("pitch_toe_off", rows), at("push_ease", rows))
+        through = _push_through(t[rows], np.minimum(at("t_push", rows), at("t_step", rows)), at("t_toe_off", rows),
+                                at("push_ease", rows))
+        start = at("pitch_ds_start", rows)
+        return start + (at("pitch_toe_off", rows) - start) * through, through
     # each rule only where it applies (the walk asks mostly for one of them at a time, and each
     # numpy operation costs about as much on no samples as on a few)
     pitch = np.zeros(len(t))
@@ -100,14 +102,14 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
             pitch[single] = np.maximum(pitch[single], kept)
         early = single & (t >= rules["t_push"])     # a short double support's push, begun early
         if early.any():
-            pitch[early] = np.maximum(pitch[early], line(early))
+            pitch[early] = np.maximum(pitch[early], line(early)[0])
     push = ~rocker & (t >= rules["t_step"])
     if push.any():
         t_step = at("t_step", push)
+        linear, through = line(push)
         # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
-        # stood still) to REACH_FRACTION by toe-off
-        through = np.clip((t[push] - t_step) / np.maximum(at("t_toe_off", push) - t_step, 1e-12), 0, 1)
+        # stood still) to REACH_FRACTION by toe-off, as the line goes
         left = single_reach_fraction(t_step, at("t_flat", push), t_step)
-        pitch[push] = np.maximum(np.maximum(line(push), at("pitch_ds_floor", push)),
+        pitch[push] = np.maximum(np.maximum(linear, at("pitch_ds_floor", push)),
                                  reach(hips[push], left + (REACH_FRACTION - left) * through))
     return pitch
