@@ -15,6 +15,7 @@ from .leg_geometry import smoothstep
 #: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
 #: flexion): a fully straight knee is a singular point of the inverse kinematics.
 REACH_FRACTION = 1 - 1e-3
+TOE_OFF_REACH = 1 - 4e-3
 
 #: The push-off lasts at least this long (s): where the double support is shorter (eq. 2 gives
 #: 17 ms at 167 steps/min), the heel's rise towards the toe-off pitch begins in single support, as
@@ -73,11 +74,12 @@ def _push_through(t, t_push, t_toe_off, ease):
     return through
 
 
-def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.ndarray:
+def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> tuple[np.ndarray, np.ndarray]:
     """:meth:`.virtual_leg.StanceFoot.pitch` with the rules (RULE_FIELDS) as numbers or one per
     sample: ``reach(hips, fraction)`` is :meth:`.virtual_leg.StanceFoot.reach_pitch` of the foot's
     geometry, ``held(t, rows)`` the single support's held pitch at those rows (None before the
-    heel-off search has set it)."""
+    heel-off search has set it). Returns the pitch and the reach fraction the leg is held to at
+    each sample (1 where no reach rule applies)."""
     def at(name, rows):
         value = rules[name]
         return value[rows] if np.ndim(value) else value
@@ -89,14 +91,15 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
         return start + (at("pitch_toe_off", rows) - start) * through, through
     # each rule only where it applies (the walk asks mostly for one of them at a time, and each
     # numpy operation costs about as much on no samples as on a few)
-    pitch = np.zeros(len(t))
+    pitch, fraction = np.zeros(len(t)), np.ones(len(t))
     rocker = t < rules["t_flat"]
     if rocker.any():
         pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
                                       at("rocker_rate", rocker))
     single = ~rocker & (t >= np.minimum(rules["t_heel_off"], rules["t_push"])) & (t < rules["t_step"])
     if single.any():
-        pitch[single] = reach(hips[single], single_reach_fraction(t[single], at("t_flat", single), at("t_step", single)))
+        fraction[single] = single_reach_fraction(t[single], at("t_flat", single), at("t_step", single))
+        pitch[single] = reach(hips[single], fraction[single])
         kept = held(t, single)
         if kept is not None:
             pitch[single] = np.maximum(pitch[single], kept)
@@ -110,6 +113,6 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> np.
         # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
         # stood still) to REACH_FRACTION by toe-off, as the line goes
         left = single_reach_fraction(t_step, at("t_flat", push), t_step)
-        pitch[push] = np.maximum(np.maximum(linear, at("pitch_ds_floor", push)),
-                                 reach(hips[push], left + (REACH_FRACTION - left) * through))
-    return pitch
+        fraction[push] = left + (TOE_OFF_REACH - left) * through
+        pitch[push] = np.maximum(np.maximum(linear, at("pitch_ds_floor", push)), reach(hips[push], fraction[push]))
+    return pitch, fraction

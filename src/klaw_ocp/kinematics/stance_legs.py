@@ -35,8 +35,8 @@ def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> V
                 mine = stance == k
                 kept[mine] = np.interp(t[rows][mine], feet[k].single_t, feet[k].single_pitch)
         return kept
-    pitch = rule_pitch(rules, t, local, geometry.reach_pitch, held)
+    pitch, fraction = rule_pitch(rules, t, local, geometry.reach_pitch, held)
     rocker_theta6 = np.array([f.rocker_theta6 for f in feet])[which]
-    legs = leg_frames(geometry, t, local, pitch, rocker_theta6, rules["t_flat"])
+    legs = leg_frames(geometry, t, local, pitch, fraction, rocker_theta6, rules["t_flat"])
     moved = {name: getattr(legs, name) + shift for name in ("hip", "knee", "ankle", "heel", "metatarsal", "toe")}
     return replace(legs, **moved)

@@ -38,7 +38,7 @@ from ..body import Body
 from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
 from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion
-from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
+from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, TOE_OFF_REACH, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
 
 #: the least time (s) over which the heel's rise from the ground is a straight line in the pitch
 HEEL_OFF_CHORD = 0.02
@@ -62,8 +62,8 @@ class VirtualLegFrames:
     theta6: np.ndarray
     pitch: np.ndarray
     period: np.ndarray
-    #: how far the hip was beyond the leg's reach (m; 0 when the leg reached): l1, or l1 ·
-    #: REACH_FRACTION where the foot stands at MAX_PITCH and can rise no further
+    #: how far the hip was beyond the leg's reach (m; 0 when the leg reached): l1, or the reach the
+    #: rules held it to where the foot stands at MAX_PITCH and can rise no further
     overreach: np.ndarray
 
 
@@ -166,8 +166,10 @@ class StanceFoot:
 
     def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
         """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
-        t, hips = np.asarray(t, float), np.asarray(hips, float)
+        return self._rule_pitch(np.asarray(t, float), np.asarray(hips, float))[0]
 
+    def _rule_pitch(self, t, hips):
+        """:func:`.pitch_rules.rule_pitch` of this stance: the pitch and the reach fraction."""
         def held(t, rows):
             return np.interp(t[rows], self.single_t, self.single_pitch) if self.single_t else None
         return rule_pitch({name: getattr(self, name) for name in RULE_FIELDS}, t, hips, self.reach_pitch, held)
@@ -175,7 +177,7 @@ class StanceFoot:
     def frames(self, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:
         """The leg at stance times ``t`` (n,) with the simulated hips ``hips`` (n, 2)."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
-        return leg_frames(self, t, hips, self.pitch(t, hips), self.rocker_theta6, self.t_flat)
+        return leg_frames(self, t, hips, *self._rule_pitch(t, hips), self.rocker_theta6, self.t_flat)
 
     # -- completing the rules -----------------------------------------------------------------
     def _flat_triggers(self, hips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -263,19 +265,20 @@ class StanceFoot:
                        push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0, EARLY_PUSH_EASE if t_push < self.t_step else 0.0))
 
 
-def leg_frames(geometry: StanceFoot, t, hips, pitch, rocker_theta6, t_flat) -> VirtualLegFrames:
+def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_theta6, t_flat) -> VirtualLegFrames:
     """The leg on ``geometry``'s foot at the pitches ``pitch``: the foot's pose (the toe angle of
     heel strike ``rocker_theta6`` fading out by ``t_flat``, numbers or one per sample), then the
-    hip and knee by two-link inverse kinematics."""
+    hip and knee by two-link inverse kinematics. ``reach_fraction``: the reach the rules held the
+    leg to at each sample (:func:`.pitch_rules.rule_pitch`)."""
     q = geometry.meta_off_theta6
     pose = geometry.foot.pose(pitch, q, rocker_theta6 * rocker_left(t, t_flat))
     body = geometry.foot.body
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
     period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q)]
-    # where the foot can rise no further, the leg keeps the reach of the rules it was held to
-    # (REACH_FRACTION), so its knee does not snap straight as the hip moves out of reach
-    limit = body.l1 * np.where(pitch >= heel_up_roots.MAX_PITCH, REACH_FRACTION, 1.0)
+    # where the foot can rise no further, the leg keeps the reach the rules held it to, so its
+    # knee does not snap straight as the hip moves out of reach
+    limit = body.l1 * np.where(pitch >= heel_up_roots.MAX_PITCH, reach_fraction, 1.0)
     return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
                             th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
                             np.maximum(reach - limit, 0.0))
@@ -299,7 +302,7 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     ankle-on-curve-P constraint is singular. A person starting to walk raises the heel only as far
     as the hip has moved over the foot; so does this rule. In steady walking the attribute holds."""
     hips = np.atleast_2d(np.asarray(hip, float))
-    reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
+    reach = float(foot.reach_pitch(hips, TOE_OFF_REACH)[0])
     bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
 
     def thigh_ahead(pitch: float) -> float:
