@@ -12,7 +12,6 @@ from hypothesis import example, given, settings, strategies as st
 from klaw_ocp.body import Body
 from klaw_ocp.dynamics.kinematics import foot_points_float
 from klaw_ocp.gait.attributes import LocomotionAttributes
-from klaw_ocp.kinematics.pitch_rules import TOE_OFF_REACH
 from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, PUSH_EASE_FROM_REST, REACH_FRACTION, FlatFoot,
                                              StanceFoot, ankle_angle, hind_foot_at_rest, leg_ik, toe_off_pitch)
 
@@ -135,20 +134,19 @@ def test_leg_ik_is_well_conditioned_at_the_straight_knee():
         assert th3[i] == pytest.approx(betas[i], abs=1e-7) and th4[i] == pytest.approx(0.0, abs=1e-7)
 
 
-def test_the_reach_fractions_bend_the_knee_five_degrees_and_ten_at_toe_off():
+def test_the_reach_fraction_bends_the_knee_about_ten_degrees():
     hip = np.array([[0.0, 0.9]])
     ankle = hip - REACH_FRACTION * BODY.l1 * unit(0.2)
     th4 = leg_ik(BODY, hip, ankle)[1][0]
     # the cosine law at the knee, independently: d^2 = l3^2 + l4^2 + 2 l3 l4 cos(theta4)
     d = REACH_FRACTION * BODY.l1
     assert math.cos(th4) == pytest.approx((d ** 2 - BODY.l3 ** 2 - BODY.l4 ** 2) / (2 * BODY.l3 * BODY.l4))
-    assert math.degrees(th4) == pytest.approx(5.1, abs=0.1)
-    # a double support raised to its reach bends the knee by TOE_OFF_REACH's 10° at toe-off
+    assert math.degrees(th4) == pytest.approx(10.25, abs=0.1)
+    # a double support raised to its reach bends the knee by that much at toe-off
     hips = np.array([[M_X + 0.45, 0.9]])
     foot = hind_foot_at_rest(BODY, ATTRS, ANKLE_X).with_double_support(hips[0], 0.1, 0.0)
     leg = foot.frames(np.array([0.1]), hips)
     assert leg.pitch[0] > 0
-    d = TOE_OFF_REACH * BODY.l1
     assert math.cos(leg.theta4[0]) == pytest.approx((d ** 2 - BODY.l3 ** 2 - BODY.l4 ** 2) / (2 * BODY.l3 * BODY.l4))
     assert math.degrees(leg.theta4[0]) == pytest.approx(10.25, abs=0.1)
 
@@ -234,7 +232,7 @@ def test_the_double_support_reaches_any_hip(dist, lean, t):
     interpolated = math.radians(45) * through
     assert leg.pitch[0] >= interpolated - 1e-12                      # raised only, never lowered
     if leg.pitch[0] > interpolated + 1e-9:                           # raised exactly to the reach
-        fraction = 1 - (1 - TOE_OFF_REACH) * through
+        fraction = 1 - (1 - REACH_FRACTION) * through
         assert np.linalg.norm(leg.ankle[0] - hip) == pytest.approx(fraction * BODY.l1, rel=1e-9)
 
 

@@ -12,15 +12,18 @@ import numpy as np
 
 from .leg_geometry import smoothstep
 
-#: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 5° of knee
-#: flexion): a fully straight knee is a singular point of the inverse kinematics.
-REACH_FRACTION = 1 - 1e-3
-TOE_OFF_REACH = 1 - 4e-3
+#: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 10° of knee
+#: flexion at 1.8 m) at the other leg's heel strike and at toe-off: a fully straight knee is a
+#: singular point of the inverse kinematics, and near it a millimetre of reach is degrees of knee.
+#: With 5° (1 - 1e-3) the knee extending into that limit moved 2.1-2.5° a frame at 500 fps at the
+#: end of single support (3.5 km/h, 1.5 m) and at toe-off (8 km/h), and started swing1 with its
+#: thigh at 675°/s. People's knee is 5-10° at the other heel strike and 35-40° at toe-off.
+REACH_FRACTION = 1 - 4e-3
 
 #: The push-off lasts at least this long (s): where the double support is shorter (eq. 2 gives
 #: 17 ms at 167 steps/min), the heel's rise towards the toe-off pitch begins in single support, as
 #: the knee of people begins to flex before the other foot lands. Over 17 ms the knee would go
-#: from 5° to 44°, 8° a frame at 500 fps.
+#: from 10° to 44°, 7° a frame at 500 fps.
 MIN_PUSH_OFF = 0.06
 
 #: The rules of :meth:`.virtual_leg.StanceFoot.pitch` that differ from stance to stance.
@@ -113,6 +116,6 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> tup
         # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
         # stood still) to REACH_FRACTION by toe-off, as the line goes
         left = single_reach_fraction(t_step, at("t_flat", push), t_step)
-        fraction[push] = left + (TOE_OFF_REACH - left) * through
+        fraction[push] = left + (REACH_FRACTION - left) * through
         pitch[push] = np.maximum(np.maximum(linear, at("pitch_ds_floor", push)), reach(hips[push], fraction[push]))
     return pitch, fraction

@@ -38,7 +38,7 @@ from ..body import Body
 from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
 from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion
-from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, TOE_OFF_REACH, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
+from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
 
 #: the least time (s) over which the heel's rise from the ground is a straight line in the pitch
 HEEL_OFF_CHORD = 0.02
@@ -302,7 +302,7 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     ankle-on-curve-P constraint is singular. A person starting to walk raises the heel only as far
     as the hip has moved over the foot; so does this rule. In steady walking the attribute holds."""
     hips = np.atleast_2d(np.asarray(hip, float))
-    reach = float(foot.reach_pitch(hips, TOE_OFF_REACH)[0])
+    reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
     bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
 
     def thigh_ahead(pitch: float) -> float:
