@@ -9,20 +9,22 @@ double support of the next step, t_ds later):
   while the shank rotates over it. The paper leaves open what fixes the foot while it rotates about
   the heel; we let it come down to flat at ``foot_flat_fraction`` of the cycle (about 8 % in
   people), arriving with zero rate and starting with the rate that keeps the hip-ankle distance
-  still at heel strike (:meth:`StanceFoot.at_heel_strike`), and the knee follow by inverse
-  kinematics;
+  still at heel strike, or where that is faster than the joints follow, landing with the knee a
+  little flexed (:meth:`StanceFoot.at_heel_strike`, :mod:`.landing`), and the knee follow by
+  inverse kinematics;
 - **heel-off**: when the ankle angle θ5 reaches its limit (``heel_off_theta5``, a dorsiflexion:
   θ5 is the angle from the shank's axis to the foot's, 90° neutral, more when the shank leans
   forward over the foot) the foot rotates about the first metatarsal head (radius l12) while the
   toe stays flat on the ground, so θ6 equals the foot's pitch. In single support the ankle stays
   at its limit (the pitch solves θ5 = limit: the heel comes up because the ankle stops giving);
-  from the other leg's heel strike the pitch runs linearly to the toe-off pitch (the push-off);
+  from the other leg's heel strike the pitch runs linearly to the toe-off pitch (the push-off;
+  from MIN_PUSH_OFF before toe-off where the double support is shorter: :mod:`.pitch_rules`);
 - **meta-off**: when θ6 reaches its limit (``meta_off_theta6``) the toe angle is held and the whole
   foot rotates about the toe tip until toe-off.
 
 In every period the pitch is raised, where needed, to the least one at which the leg reaches its
-ankle with the knee ``REACH_FRACTION`` short of straight, and it never falls back (the heel does
-not come down again). Hip and knee angles follow by two-link inverse kinematics (knee forward).
+ankle (from l1 at foot flat to ``REACH_FRACTION`` of it, about 10° of knee, at the other heel
+strike and at toe-off), and it never falls back (the heel does not come down again). Hip and knee angles follow by two-link inverse kinematics (knee forward).
 
 Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles in radians. Pitch
 ``p`` is the foot's heel-up rotation (clockwise), negative while it rotates toe-up about the heel.
