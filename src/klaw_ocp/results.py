@@ -27,6 +27,7 @@ import numpy as np
 from .control.parameter_units import parameter_unit
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
+from .kinematics.leg_geometry import leg_fk
 from .kinematics.swing_feet import lifted_feet
 from .kinematics.swing_foot import sole_heights
 from .kinematics.walk_samples import gradient
@@ -217,9 +218,7 @@ def _swing_leg(body, step, hips, names):
         hips = stance_hips(body, x[:, :6], np.array([step.origin_x, body.l9]))[0]
     else:
         hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
-    shank = x[:, 6] + theta4
-    ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
-        - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+    shank, _, ankle = leg_fk(body, hips, x[:, 6], theta4)
     return t, hips, ankle, shank
 
 

@@ -192,8 +192,6 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
                     outside += time.perf_counter() - t0
             interrupts.check()
     except ConvergenceError as err:
-        walk.wall_s = time.perf_counter() - wall0 - outside
-        walk.solver_messages = list(messages.messages)
         if interrupts.pressed:      # a second Ctrl-C inside IPOPT fails the solve: it is an interrupt
             walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
             raise Interrupted(walk) from None
@@ -203,15 +201,14 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             raise
         return walk
     except KeyboardInterrupt as err:
-        walk.wall_s = time.perf_counter() - wall0 - outside
-        walk.solver_messages = list(messages.messages)
         walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
         raise Interrupted(walk) from err
     finally:
+        # however the walk ends (complete, failed, interrupted): before the caller sees it
+        walk.wall_s = time.perf_counter() - wall0 - outside
+        walk.solver_messages = list(messages.messages)
         if bar is not None:
             bar.close()      # the bar's line ends before any message that follows
-    walk.wall_s = time.perf_counter() - wall0 - outside
-    walk.solver_messages = list(messages.messages)
     return walk
 
 

@@ -163,8 +163,8 @@ def swing3_forces(x, t, u, c):
 
 
 def swing3_clearance(x, t, u, c):
-    """Heel and toe tip heights of the swing foot before the heel strikes (reported: swing3's one
-    unknown is fixed by the landing, so these are not constrained)."""
+    """The heel's height before it strikes (reported as the step's heel clearance: swing3's one
+    unknown is fixed by the landing, so it is not constrained)."""
     _, _, hip, _, _ = stance_part(x[0:6], t, c)
-    heel, toe = foot(ca.vertcat(x[6], 0), hip, t, c)
-    return ca.vertcat(heel[1], toe[1])
+    heel, _ = foot(ca.vertcat(x[6], 0), hip, t, c)
+    return heel[1]

@@ -24,7 +24,7 @@ from .stance_spec import stance_lock_events
 
 _NC = len(law.SWING_CONTEXT)
 SWING2_PATH = ("toe_height", "heel_height")
-SWING3_PATH = ("heel_height", "toe_height")
+SWING3_PATH = ("heel_height",)
 
 
 def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule="momentum"):

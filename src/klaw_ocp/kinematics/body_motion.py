@@ -230,14 +230,16 @@ def body_motion(walk, fps: float) -> BodyMotion:
     pelvis_at = lambda t: np.zeros((len(t), 3))
     pelvis_angles = pelvis_at(samples.t)
     pieces = WalkPieces.of(walk)
-    planes, centre, lean, _ = leg_planes(walk, samples, pelvis_angles, pieces)
+    planes, centre, lean, simulated = leg_planes(walk, samples, pelvis_angles, pieces)
     hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
     in_plane, on_ground = ground_legs(walk, samples, hips)
     # at any instant at most one leg swings: both legs' swings in one pass
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
     hips_at = swing_hips(walk, pelvis_at, pieces)
-    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_feet(walk, hips_at))
+    own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
+    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_feet(walk, hips_at),
+                       hips=(simulated[rows], own))
     frames, start, legs = slice(None), 0, {}
     for side, r in swinging.items():
         for name in _POINTS:

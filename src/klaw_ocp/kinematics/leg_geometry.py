@@ -35,6 +35,15 @@ def _points(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
+def leg_fk(body: Body, hip: np.ndarray, theta3, theta4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The swing model's leg from its hip (n, 2) and angles θ3, θ4 (n,): the shank angle
+    θ3 + θ4, the knee = hip - l3 (sin θ3, cos θ3) and the ankle = knee - l4 (sin, cos)(θ3 + θ4)
+    (n, 2); :func:`leg_ik` inverts it."""
+    shank = theta3 + theta4
+    knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
+    return shank, knee, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+
+
 def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Thigh angle θ3, knee flexion θ4 (swing-model convention: knee = hip - l3 (sin θ3, cos θ3))
     and the knee, of the two-segment leg from ``hip`` (n, 2) to ``ankle`` (n, 2) or (2,), knee

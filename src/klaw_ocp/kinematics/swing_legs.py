@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.kinematics import foot_points_arrays
-from .leg_geometry import leg_ik, smoothstep
+from .leg_geometry import leg_fk, leg_ik, smoothstep
 from .swing_feet import lifted_feet
 from .walk_samples import swing_curves
 
@@ -34,10 +34,8 @@ TOE_OFF_BLEND = 0.5
 
 def _model_leg(body, swing, step, tau, simulated_hip):
     """The planar model's swing leg: (shank angle θ3 + θ4, ankle (n, 2)) from the simulated hip."""
-    theta3, theta4 = swing(step, tau).T
-    shank = theta3 + theta4
-    knee = simulated_hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
-    return shank, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+    shank, _, ankle = leg_fk(body, simulated_hip, *swing(step, tau).T)
+    return shank, ankle
 
 
 def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, landing):
@@ -88,20 +86,20 @@ def _landings(walk, swing, hips_at) -> tuple[np.ndarray, np.ndarray]:
                         np.array([f.rocker_pitch for f in lands]))
 
 
-def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet) -> dict:
+def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None) -> dict:
     """The swing leg in its plane at samples of steps ``step`` (n,) and step-local times ``tau``
     (n,), all after their step's toe-off: its points (n, 2), "hip" .. "toe".
     ``hips_at(step, tau)`` gives the simulated hip and the swinging leg's own hip in its plane,
     (n, 2) each, at any such samples (the frames', and each step's guard grid);
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
     at its toe-off as the body shows it (:func:`.body_motion.toe_off_feet`), which the swing leg
-    starts from."""
+    starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already."""
     body, steps = walk.spec.body, walk.steps
     swing = swing_curves(walk)
     every = np.arange(len(steps))
     toe_off = _end_offsets(walk, swing, hips_at, every, np.array([s.swing_foot.t_toe_off for s in steps]), *toe_off_feet)
     landing = _landings(walk, swing, hips_at)
-    simulated, own = hips_at(step, tau)
+    simulated, own = hips_at(step, tau) if hips is None else hips
     shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, toe_off, landing)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
