@@ -13,6 +13,10 @@ shooting with the tracking stance) it runs the walk once to build or load the so
   rendered in memory) and the writing of the files;
 - the real-time factor (walked seconds per wall second of the full pipeline).
 
+It times the kinematics on their own line: the body's 56 angles at 30 fps (``body_motion`` of
+the multiple-shooting walk), and the walk with its angles (the dynamics plus those) as a
+real-time factor, issue #22's target.
+
 It times the seven plots of a run (``klaw_ocp.io.plots.render_plots`` of the multiple-shooting
 walk) on their own line: the first rendering in the process (it imports matplotlib) and the median
 of the others; and, apart from the walk, its ``walk.gif`` (``klaw_ocp.io.animation``, docs/gif.md:
@@ -44,6 +48,7 @@ from dataclasses import replace
 
 from klaw_ocp.config import load_config
 from klaw_ocp.io import render_walk, write_rendered
+from klaw_ocp.kinematics.body_motion import body_motion
 from klaw_ocp.walk import simulate_walk, walk_spec
 
 MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))
@@ -53,7 +58,9 @@ MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("
 REFERENCE_STANCE_SOLVE_MS = 0.5
 TARGETS = (("realtime_factor", ">=", 50.0), ("ms_over_ps_time_ratio", "<=", 1.0),
            ("realtime_factor_tracking", ">=", 10.0), ("cold_cli_s", "<=", 5.0), ("cold_cli_plots_s", "<=", 3.0),
-           ("peak_rss_mb", "<=", 300.0))
+           ("peak_rss_mb", "<=", 300.0), ("realtime_factor_walk_and_angles", ">=", 100.0))
+#: the frame rate of the body's angles in the pipeline (``output.fps``'s default)
+ANGLES_FPS = 30.0
 
 
 def _mode(config, method: str, stance: str, repeats: int) -> dict:
@@ -169,7 +176,23 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False, cpus=None) -> t
     return wall, int(stdout.split()[-1]) / 1024.0
 
 
-def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[float, float], steps: dict) -> str:
+def _kinematics(walk, dynamics_s: float, repeats: int) -> dict:
+    """The body's 56 angles at ANGLES_FPS on their own (``body_motion``, the kinematics: virtual
+    legs, swing feet, pelvis, upper body; median of ``repeats``), and the walk with its angles
+    (issue #22: the dynamics' median plus this) as a real-time factor."""
+    body_motion(walk, ANGLES_FPS)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        body_motion(walk, ANGLES_FPS)
+        times.append(time.perf_counter() - t0)
+    kinematics = statistics.median(times)
+    return {"kinematics_s": kinematics, "walk_and_angles_s": dynamics_s + kinematics,
+            "realtime_factor_walk_and_angles": walk.duration / (dynamics_s + kinematics)}
+
+
+def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[float, float], steps: dict,
+           kinematics: dict) -> str:
     lines = [f"{'mode':34s} {'steps':>5s} {'build s':>8s} {'dynamics s':>10s} {'pipeline s':>10s} "
              f"{'write s':>8s} {'x real time':>11s}"]
     for r in rows:
@@ -181,6 +204,9 @@ def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[f
         cells = [f"{v['median_ms']:7.2f} ({v['median_iterations']:g})" for v in r["subphases"].values()]
         lines.append(f"{r['mode']:34s} " + " ".join(f"{c:>14s}" for c in cells))
     lines.append("")
+    lines.append(f"kinematics (the body's 56 angles at {ANGLES_FPS:g} fps, multiple-shooting walk): "
+                 f"{1e3 * kinematics['kinematics_s']:.1f} ms; the walk with its angles "
+                 f"{kinematics['walk_and_angles_s']:.4f} s, {kinematics['realtime_factor_walk_and_angles']:.1f}x real time")
     lines.append(f"plots (7 PNGs of the multiple-shooting walk, one process): first {plots[0]:.2f} s (imports matplotlib), "
                  f"then {plots[1]:.2f} s")
     lines.append(f"animation (walk.gif of the natural walk): {animation[0]:.2f} s, {animation[1]:.2f} MB")
@@ -207,6 +233,7 @@ def main() -> None:
     config = load_config(args.config)
     rows = [_mode(config, method, stance, args.repeats) for method, stance in MODES]
     walk = simulate_walk(walk_spec(config, "multiple-shooting"))
+    kinematics = _kinematics(walk, rows[0]["dynamics_s"], args.repeats)
     plots = _plots(walk, args.repeats)
     animation = _animation(walk)
     steps = _step_writing(config, args.repeats)
@@ -223,10 +250,10 @@ def main() -> None:
         "plots_first_s": plots[0], "plots_s": plots[1], "animation_s": animation[0], "animation_mb": animation[1],
         "step_write_ms": steps["step_ms"], "step_write_extra_ms": steps["extra_ms_per_step"],
         "peak_rss_mb": max(rss for _, rss in cli), "benchmark_process_rss_mb": own_rss,
-        "walk_s": ms["walked_s"], "modes": rows,
+        "walk_s": ms["walked_s"], "modes": rows, **kinematics,
         "machine": {"cpu_count": os.cpu_count(), "pinned_to_one_cpu": not args.all_cores, "python": sys.version.split()[0]},
     }
-    print(_table(rows, cli, plots, animation, steps))
+    print(_table(rows, cli, plots, animation, steps, kinematics))
     print(f"\nmultiple shooting / plain shooting time: {result['ms_over_ps_time_ratio']:.2f}; "
           f"benchmark process peak RSS {own_rss:.0f} MB")
     for key, op, bound in TARGETS:

@@ -118,13 +118,11 @@ def render_body(run) -> dict:
     """The body's files of a run (angles.csv, walk.bvh, walk.mot), none without angles."""
     files = {}
     if run.angles is not None and len(run.angles["time"]):
-        from ..body import Body
         from .bvh import BVH_FILE, bvh_text
         from .opensim import MOT_FILE, render_mot
         files["angles"] = ("angles.csv", angles_csv(run.angles).encode("utf-8"))
         files["bvh"] = (BVH_FILE, bvh_text(run).encode("utf-8"))
-        body = Body(run.body["height"], run.body["mass"])
-        files["mot"] = (MOT_FILE, render_mot(run.angles, body, name=run.summary.get("name", "walk")))
+        files["mot"] = (MOT_FILE, render_mot(run.angles, run.body_model(), name=run.summary.get("name", "walk")))
     return files
 
 
