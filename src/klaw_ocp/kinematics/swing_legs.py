@@ -6,12 +6,14 @@ hip in its own plane (:class:`.body_motion.LegPlanes`), which the lateral displa
 a few millimetres away from it. Near a straight knee a millimetre of hip-to-ankle distance is
 degrees of knee, so the body keeps the dynamics' hip-to-ankle *distance* (the dynamic knee
 angle), pointed from its own hip at the model's ankle: the ankle then moves by that millimetre
-along the leg, and the knee the body shows is the dynamic one. At heel strike the two hips
-coincide (no lateral displacement), and the heel lands on the planned point. At toe-off the leg
-continues the virtual leg, whose knee is the inverse kinematics of the leg's own hip and the
-planted foot: there the body's leg starts at the virtual leg's ankle as the body shows it
-(:func:`.body_motion.toe_off_ankles`) and blends into the model's ankle and the dynamic distance
-over the first TOE_OFF_BLEND of swing1 (a smoothstep), so no angle jumps.
+along the leg, and the knee the body shows is the dynamic one. At both ends the leg meets a
+virtual leg (:func:`_end_offsets`), whose knee is the inverse kinematics of the leg's own hip and
+the planted foot: at toe-off the body's leg starts at the virtual leg's ankle and foot pitch as
+the body shows them (:func:`.body_motion.toe_off_feet`) and blends into the model's ankle, the
+dynamic distance and the scheduled foot over the first TOE_OFF_BLEND of swing1; over swing3 it
+blends into the next stance's heel-strike posture (its knee flexed where :mod:`.landing` says,
+its foot then a little more toe-up), the heel on the planned point (the two hips coincide there:
+no lateral displacement). Smoothsteps both, so no angle jumps.
 
 The foot (:meth:`.swing_foot.SwingFoot.lifted_foot`; every step's in one pass, :mod:`.swing_feet`):
 the schedule, turned where it would enter the ground and, where the leg is too low for any foot,
