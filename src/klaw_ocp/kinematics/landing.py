@@ -26,6 +26,9 @@ import math
 
 import numpy as np
 
+from .leg_geometry import ankle_angle, leg_ik
+from .pitch_rules import rocker_pitch
+
 #: the fastest thigh, knee and ankle may start after heel strike (rad/s): 1.8° a frame at 500 fps
 LANDING_JOINT_RATE = math.radians(900)
 #: the fastest the foot's pitch may start where the knee lands bent (rad/s). The pitch is not a
@@ -66,12 +69,16 @@ def landing_pitch(body, ankle_x: float, hip, reach: float, hip_velocity) -> tupl
 
 def starting_rates(foot, hip, hip_velocity) -> np.ndarray:
     """The thigh's, the knee's and the ankle's rates (rad/s: θ3, θ4, θ5) as the stance foot
-    ``foot`` (a :class:`.virtual_leg.StanceFoot`) starts, the hip moving at ``hip_velocity``."""
+    ``foot`` (a :class:`.virtual_leg.StanceFoot`) starts, the hip moving at ``hip_velocity``:
+    over a step of _RATE_STEP, the rocker's pitch, the ankle turned about the heel and the leg's
+    inverse kinematics as :meth:`.virtual_leg.StanceFoot.frames` has them, without the rest of
+    the foot (the walk asks this at every heel strike)."""
     t = np.array([0.0, _RATE_STEP])
     hips = np.asarray(hip, float) + t[:, None] * np.asarray(hip_velocity, float)
-    legs = foot.frames(t, hips)
-    return np.array([legs.theta3[1] - legs.theta3[0], legs.theta4[1] - legs.theta4[0],
-                     legs.theta5[1] - legs.theta5[0]]) / _RATE_STEP
+    pitch = rocker_pitch(t, foot.t_flat, foot.rocker_pitch, foot.rocker_rate)
+    theta3, theta4, _ = leg_ik(foot.foot.body, hips, foot.foot.ankle_at(pitch, foot.meta_off_theta6))
+    theta5 = ankle_angle(theta3, theta4, -pitch)
+    return np.array([theta3[1] - theta3[0], theta4[1] - theta4[0], theta5[1] - theta5[0]]) / _RATE_STEP
 
 
 def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> tuple[float, float]:

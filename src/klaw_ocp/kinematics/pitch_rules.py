@@ -53,7 +53,7 @@ def rocker_left(t, t_flat):
     return np.where(t_flat > 0, 1 - smoothstep(t / np.where(t_flat > 0, t_flat, 1.0)), 0.0)
 
 
-def _rocker_pitch(t, t_flat, p0, rate):
+def rocker_pitch(t, t_flat, p0, rate):
     """The pitch while the foot turns about the heel, p0 (1 - s)^k (1 + c s) with s = t/t_flat and
     p0 the heel-strike pitch: it starts at ``rate`` and reaches flat at t_flat with zero rate,
     never overshooting. That is the cubic Hermite curve (k = 2) while the rate is at most three
@@ -97,7 +97,7 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> tup
     pitch, fraction = np.zeros(len(t)), np.ones(len(t))
     rocker = t < rules["t_flat"]
     if rocker.any():
-        pitch[rocker] = _rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
+        pitch[rocker] = rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
                                       at("rocker_rate", rocker))
     single = ~rocker & (t >= np.minimum(rules["t_heel_off"], rules["t_push"])) & (t < rules["t_step"])
     if single.any():
