@@ -86,12 +86,22 @@ def test_no_angle_moves_more_than_2_degrees_between_frames_at_500_fps(walked):
     assert steps.max() < MAX_FRAME_STEP_DEG, (ANGLE_NAMES[worst[1]], table["time"][worst[0]], steps.max())
 
 
-@pytest.mark.parametrize("name", ["long_steps", "short_steps"])
+EXTREMES = {
+    "long_steps": ROOT / "configs" / "long_steps.yaml",
+    "short_steps": ROOT / "configs" / "short_steps.yaml",
+    "8kmh": {"name": "fast", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 8.0, "steps": 4}},
+    "3.5kmh-1.5m": {"name": "short", "body": {"height": 1.5, "mass": 60}, "walk": {"speed": 3.5, "steps": 4}},
+}
+
+
+@pytest.mark.parametrize("name", list(EXTREMES))
 def test_no_angle_moves_more_than_2_degrees_between_frames_in_the_extreme_steps(name):
     """configs/long_steps.yaml (the hip beyond the trailing leg's reach before toe-off, its foot at
-    MAX_PITCH) and configs/short_steps.yaml (a double support of 17 ms; the push-off begins in
-    single support): at 500 fps, no angle moves by 2° or more between frames."""
-    walk = simulate_walk(ROOT / "configs" / f"{name}.yaml", method="multiple-shooting")
+    MAX_PITCH), configs/short_steps.yaml (a double support of 17 ms; the push-off begins in single
+    support), 8 km/h (a landing on a flexed knee; the knee's reach at toe-off) and 3.5 km/h on a
+    1.5 m body (the knee's reach at the end of single support): at 500 fps, no angle moves by 2°
+    or more between frames."""
+    walk = simulate_walk(EXTREMES[name], method="multiple-shooting")
     angles = np.degrees(body_motion(walk, FPS).angles)
     steps = np.abs(np.diff(angles, axis=0))
     worst = np.unravel_index(np.argmax(steps), steps.shape)
