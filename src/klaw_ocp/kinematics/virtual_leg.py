@@ -257,14 +257,17 @@ class StanceFoot:
             start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         t_toe_off = self.t_step + t_ds
         t_push = push_start(self.t_step, t_toe_off, self.t_flat)
-        line_start = float(np.interp(t_push, self.single_t, self.single_pitch)) if t_push < self.t_step and self.single_t else start
+        # a push-off begun in single support eases out of its held pitch (EARLY_PUSH_EASE); the
+        # walking start's, begun before the walk, is at its full rate when the walk begins
+        early = t_push < self.t_step and bool(self.single_t)
+        line_start = float(np.interp(t_push, self.single_t, self.single_pitch)) if early else start
         # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
         # does not: its heel rising at once keeps the leg from straightening as the hip moves away
         reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
         straight = reach >= self.foot.body.l1 * (REACH_FRACTION - 1e-9)
         return replace(self, t_toe_off=t_toe_off, t_push=t_push, pitch_ds_start=min(line_start, start),
                        pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start),
-                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0, EARLY_PUSH_EASE if t_push < self.t_step else 0.0))
+                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0, EARLY_PUSH_EASE if early else 0.0))
 
 
 def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_theta6, t_flat) -> VirtualLegFrames:
@@ -341,5 +344,6 @@ def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True)
     the leg is at its reach (REACH_FRACTION, not straight), and where the double support is
     shorter than MIN_PUSH_OFF the push-off began before the walk, so the heel is up at its start."""
     foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0, push_ease=PUSH_EASE_FROM_REST)
-    # mid-stride, its foot was flat and its leg at its reach before the walk began
-    return foot if from_rest else replace(foot, t_flat=-MIN_PUSH_OFF)
+    # mid-stride, its foot was flat and its leg at its reach before the walk began, and its push-off
+    # is under way: no easing in
+    return foot if from_rest else replace(foot, t_flat=-MIN_PUSH_OFF, push_ease=0.0)
