@@ -243,8 +243,11 @@ class StanceFoot:
         least the reach there (a hind foot with no single support: the push starts from its
         reach, not below it, where the line would overtake the reach with a kink in the knee)."""
         before, hips = np.array([self.t_step - 1e-12]), np.atleast_2d(hip)
+        pitch = max(float(self.pitch(before, hips)[0]), 0.0)
+        if self.t_flat < self.t_heel_off < before[0]:
+            return pitch          # single support's rule, which holds the leg to that reach already
         fraction = single_reach_fraction(self.t_step, self.t_flat, self.t_step)
-        return max(float(self.pitch(before, hips)[0]), float(self.reach_pitch(hips, fraction)[0]), 0.0)
+        return max(pitch, float(self.reach_pitch(hips, fraction)[0]))
 
     def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float,
                             start: float | None = None) -> "StanceFoot":
