@@ -27,6 +27,7 @@ import numpy as np
 from ..dynamics.kinematics import foot_points_arrays
 from .leg_geometry import leg_fk, leg_ik, smoothstep
 from .swing_feet import lifted_feet
+from .swing_foot import SCHEDULE_FIELDS, _clip, schedule_angles
 from .walk_samples import swing_curves
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
@@ -59,33 +60,41 @@ def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, lan
     return shank + turn, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
 
 
-def _end_offsets(walk, swing, hips_at, steps, t, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
+def _end_offsets(walk, swing, steps, t, simulated_hip, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
     """How the body's swing leg differs from the model's where it meets a virtual leg, at times
-    ``t`` of the steps ``steps`` (indices): the virtual leg's ankles (k, 2) and foot pitches (k,)
-    there against the model's ankle and scheduled foot. Returns (the ankle offsets (all steps, 2),
+    ``t`` of the steps ``steps`` (indices), the simulated hip there ``simulated_hip`` (k, 2): the
+    virtual leg's ankles (k, 2) and foot pitches (k,) against the model's ankle and scheduled
+    foot. Returns (the ankle offsets (all steps, 2),
     the turns (rad, all steps) of the shank the scheduled foot is set on that give the virtual
     foot's pitch); zero for the steps not given."""
     body = walk.spec.body
     ankle_offset, shank_offset = np.zeros((len(walk.steps), 2)), np.zeros(len(walk.steps))
     if len(steps):
-        model_shank, model_ankle = _model_leg(body, swing, steps, t, hips_at(steps, t)[0])
-        theta5 = np.array([walk.steps[k].swing_foot.angles(np.array([tk]))[0][0] for k, tk in zip(steps, t)])
+        model_shank, model_ankle = _model_leg(body, swing, steps, t, simulated_hip)
+        feet = [walk.steps[k].swing_foot for k in steps]     # their schedules, in one pass
+        theta5 = schedule_angles(np.asarray(t, float), {name: np.array([getattr(f, name) for f in feet])
+                                                        for name in SCHEDULE_FIELDS}, _clip)[0]
         ankle_offset[steps] = ankles - model_ankle
         # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
         shank_offset[steps] = (theta5 - np.pi / 2 + pitches) - model_shank
     return ankle_offset, shank_offset
 
 
-def _landings(walk, swing, hips_at) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_end_offsets` at each step's heel strike: the swing leg lands as the next stance's
-    virtual leg starts (:mod:`.landing`: its knee may be flexed, its foot then a little more toe-up
-    about the same heel point). The walk's last step has no next stance."""
+def _landings(walk, swing, simulated_hip) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_end_offsets` at each step's heel strike (the simulated hips there (steps - 1, 2)):
+    the swing leg lands as the next stance's virtual leg starts (:mod:`.landing`: its knee may be
+    flexed, its foot then a little more toe-up about the same heel point). The walk's last step has
+    no next stance."""
     steps = walk.steps
     lands = [s.stance_foot for s in steps[1:]]
     ankles = np.vstack([f.foot.ankle_at([f.rocker_pitch], f.meta_off_theta6) for f in lands]) if lands else np.zeros((0, 2))
-    return _end_offsets(walk, swing, hips_at, np.arange(len(lands)),
-                        np.array([s.swing_foot.t_heel_strike for s in steps[:-1]]), ankles,
+    return _end_offsets(walk, swing, np.arange(len(lands)), _heel_strikes(walk), simulated_hip, ankles,
                         np.array([f.rocker_pitch for f in lands]))
+
+
+def _heel_strikes(walk) -> np.ndarray:
+    """The step-local times of every step's heel strike but the last's (the next stance's start)."""
+    return np.array([s.swing_foot.t_heel_strike for s in walk.steps[:-1]])
 
 
 def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None) -> dict:
@@ -98,17 +107,21 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already."""
     body, steps = walk.spec.body, walk.steps
     swing = swing_curves(walk)
-    every = np.arange(len(steps))
-    toe_off = _end_offsets(walk, swing, hips_at, every, np.array([s.swing_foot.t_toe_off for s in steps]), *toe_off_feet)
-    landing = _landings(walk, swing, hips_at)
-    simulated, own = hips_at(step, tau) if hips is None else hips
-    shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, toe_off, landing)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
     swinging, counts = np.unique(step, return_counts=True)
     grids = [steps[k].swing_foot.guard_grid() for k in swinging]
     grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
-    grid_simulated, grid_own = hips_at(grid_step, grid_t)
+    # the hips at every toe-off, every heel strike and on the grids, in one pass
+    every, t_to, t_hs = np.arange(len(steps)), np.array([s.swing_foot.t_toe_off for s in steps]), _heel_strikes(walk)
+    at_step, at_t = np.r_[every, np.arange(len(t_hs)), grid_step], np.r_[t_to, t_hs, grid_t]
+    at_simulated, at_own = hips_at(at_step, at_t)
+    ends = len(every) + len(t_hs)
+    toe_off = _end_offsets(walk, swing, every, t_to, at_simulated[:len(every)], *toe_off_feet)
+    landing = _landings(walk, swing, at_simulated[len(every):ends])
+    simulated, own = hips_at(step, tau) if hips is None else hips
+    shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, toe_off, landing)
+    grid_simulated, grid_own = at_simulated[ends:], at_own[ends:]
     grid_shank, grid_ankle = _body_leg(body, walk, swing, grid_step, grid_t, grid_simulated, grid_own, toe_off, landing)
     order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
     theta5, theta6, lift = np.empty(len(tau)), np.empty(len(tau)), np.empty(len(tau))
