@@ -224,19 +224,21 @@ class StepController:
         pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, math.radians(a.toe_off_foot_pitch), con.theta3)
         hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds)
         ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
-        legs = hind.frames(t0 + stance.t[ds_nodes], hips[ds_nodes])
-        ds = {"t": stance.t[ds_nodes], "theta3": legs.theta3, "theta4": legs.theta4, "pitch": legs.pitch}
         # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
         # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached
         # full stretch, where its inverse kinematics is singular), and an infinitesimal difference
         # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
         window = TOE_OFF_RATE_WINDOW * t_to
-        ends = hind.frames(t0 + np.array([t_to, t_to - window]), np.array([hip_to, hip_to - window * hip_vel_to]))
-        th3_to, th4_to, ankle_to = float(ends.theta3[0]), float(ends.theta4[0]), ends.ankle[0]
-        th3d_to = float(ends.theta3[0] - ends.theta3[1]) / window
+        # the double support's nodes, then toe-off and the window's start, in one pass
+        m = len(ds_nodes)
+        legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window)],
+                           np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to]))
+        ds = {"t": stance.t[ds_nodes], "theta3": legs.theta3[:m], "theta4": legs.theta4[:m], "pitch": legs.pitch[:m]}
+        th3_to, th4_to, ankle_to = float(legs.theta3[m]), float(legs.theta4[m]), legs.ankle[m]
+        th3d_to = float(legs.theta3[m] - legs.theta3[m + 1]) / window
 
         # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
-        theta5_to, theta6_to = float(ends.theta5[0]), float(ends.theta6[0])
+        theta5_to, theta6_to = float(legs.theta5[m]), float(legs.theta6[m])
         theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
         hip_t1 = hips[node(t1)]
         knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
