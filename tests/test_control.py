@@ -306,3 +306,20 @@ def test_gains_scale_with_mass_and_height_squared():
     assert big.v_w / ref.v_w == pytest.approx(140 / 50)
     for k in ("k_t", "d_t", "k_h", "d_h"):                             # rotations: inertias, m h^2
         assert getattr(big, k) / getattr(ref, k) == pytest.approx(140 / 50 * (2.1 / 1.5) ** 2)
+
+
+def test_the_toe_under_the_knee_is_solved_in_closed_form():
+    """curve_p.toe_under_knee: the shank angle at which the toe tip (dynamics.foot_points_float) is
+    directly under the knee, for ankle angles 60-160° and toe angles 0-40°, to round-off."""
+    import math
+    from klaw_ocp.dynamics.kinematics import foot_points_float
+    body = Body(height=1.8, mass=80.0)
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        knee = rng.uniform(-1.0, 1.0, 2)
+        theta5, theta6 = math.radians(rng.uniform(60, 160)), math.radians(rng.uniform(0, 40))
+        ankle, phi = ds.toe_under_knee(body, knee, theta5, theta6)
+        assert -0.5 <= phi <= math.pi / 2
+        assert np.hypot(*(ankle - knee)) == pytest.approx(body.l4, abs=1e-15)
+        toe = foot_points_float(ankle[0], ankle[1], phi, theta5, theta6, body.l8, body.l9, body.l12, body.l13)[2]
+        assert toe[0] == pytest.approx(knee[0], abs=1e-14)

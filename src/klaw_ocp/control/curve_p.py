@@ -46,22 +46,20 @@ def root(f, a: float, b: float, xtol: float) -> float:
 
 
 def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -> tuple[np.ndarray, float]:
-    """Ankle position and shank angle with the toe tip directly under the knee (end of swing1)."""
+    """Ankle position and shank angle with the toe tip directly under the knee (end of swing1).
+
+    The toe's x less the knee's (:func:`~klaw_ocp.dynamics.kinematics.foot_points_float` with the
+    ankle l4 below the knee along the shank at φ) is A sin φ + B cos φ, with A = -l4 - r cos θ5 -
+    l9 sin θ5 - l13 cos(θ5 + θ6) and B = r sin θ5 - l9 cos θ5 + l13 sin(θ5 + θ6), r the metatarsal
+    head's reach ahead of the ankle: its root is φ = atan2(B, -A) (A < 0: the shank is the longest
+    term). In closed form; it was a regula falsi to 1e-13 rad, thousands of evaluations a walk."""
     kx, ky = float(knee[0]), float(knee[1])
     l4, l9, l13 = body.l4, body.l9, body.l13
-    # the toe's x of foot_points_float, operation for operation (the same root to the last bit),
-    # with what does not depend on phi taken out of the search's thousands of evaluations a walk
-    c5, s5 = math.cos(theta5), math.sin(theta5)
-    c6, s6 = math.cos(theta6), math.sin(theta6)
     reach = math.sqrt(body.l12 ** 2 - l9 ** 2)
-
-    def toe_ahead(phi):
-        ux, uy = math.sin(phi), math.cos(phi)
-        fx, fy = -(c5 * ux - s5 * uy), -(s5 * ux + c5 * uy)   # u_f = -u_b
-        nx = -fy
-        toe_x = kx - l4 * ux + reach * fx - l9 * nx + l13 * (c6 * fx - s6 * fy)
-        return toe_x - kx
-    phi = root(toe_ahead, -0.5, math.pi / 2, xtol=1e-13)
+    c5, s5 = math.cos(theta5), math.sin(theta5)
+    a = -l4 - reach * c5 - l9 * s5 - l13 * math.cos(theta5 + theta6)
+    b = reach * s5 - l9 * c5 + l13 * math.sin(theta5 + theta6)
+    phi = math.atan2(b, -a)
     return np.array([kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)]), phi
 
 
