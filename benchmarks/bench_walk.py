@@ -267,6 +267,7 @@ def main() -> None:
     print(f"\nthis machine's median stance solve is {ms['subphases']['stance']['median_ms']:.2f} ms, "
           f"{slower:.2f}x the reference machine's {REFERENCE_STANCE_SOLVE_MS} ms (docs/performance.md); "
           f"scaled by that (an estimate, not measured): real-time factor ~{ms['realtime_factor'] * slower:.0f}x, "
+          f"the walk with its angles ~{kinematics['realtime_factor_walk_and_angles'] * slower:.0f}x, "
           f"tracking ~{tracking['realtime_factor'] * slower:.0f}x, cold run with plots and gif "
           f"~{cli[2][0] / slower:.1f} s")
     if args.json:
