@@ -19,14 +19,13 @@ hip must not drop below, world y, m) and each subphase the unit of every paramet
 """
 from __future__ import annotations
 
-import math
-
 import casadi as ca
 import numpy as np
 
 from .control.parameter_units import parameter_unit
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
+from .errors import finite_real
 from .kinematics.leg_geometry import leg_fk
 from .kinematics.swing_feet import lifted_feet
 from .kinematics.swing_foot import sole_heights
@@ -156,11 +155,6 @@ def step_table(step, body, step_offsets: list | None = None) -> dict:
             for c in COLUMNS}
 
 
-def _finite(value):
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
 def hip_dip(body, stance, offsets: np.ndarray | None = None) -> float:
     """How far the hip goes below the lower of its step's two heel-strike heights (0 if never):
     §4's "never … below its minimal value at heel strike", a hard constraint only in the
@@ -247,13 +241,16 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
     """One step's entry of the summary's ``steps`` (it does not change once the step is solved);
     ``step_offsets``: its hip offsets (:func:`hip_offsets`), ``swing_foot`` its
     :func:`swing_foot_clearance`, when the caller has them."""
-    hips = _step_hips(spec.body, step, step_offsets)
+    if step_offsets is None:
+        step_offsets = step_hip_offsets(spec.body, step)
+    if swing_foot is None:
+        swing_foot = swing_foot_clearance(spec.body, step, _step_hips(spec.body, step, step_offsets))
     stance = [sub.name for sub in step.subphases].index("stance")
     entry = step.plan.as_dict()
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                  hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                  hip_dip_m=hip_dip(spec.body, step.subphases[stance], step_offsets[stance]), notes=list(step.notes),
-                 swing_foot=swing_foot if swing_foot is not None else swing_foot_clearance(spec.body, step, hips),
+                 swing_foot=swing_foot,
                  curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
     if step.hip_reference:
         l9, ref = spec.body.l9, step.hip_reference
@@ -261,18 +258,14 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
                                   "excursion_m": ref["excursion"],
                                   "floor_m": min(ref["y_start"], ref["y_end"]) + l9}
     entry["subphases"] = [{
-        "name": s.name, "residual": _finite(s.residual), "iterations": int(s.iterations),
+        "name": s.name, "residual": finite_real(s.residual), "iterations": int(s.iterations),
         "wall_s": float(s.wall_s), "parameters": {k: float(v) for k, v in s.parameters.items()},
         "units": {k: parameter_unit(k) for k in s.parameters},
         "success": bool(s.success), "message": s.message, "events": [list(e) for e in s.events],
-        "path_min": _finite(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
+        "path_min": finite_real(s.path_min), "nlp": s.nlp, "fallbacks": list(s.fallbacks),
         "build_s": float(s.build_s),
     } for s in step.subphases]
     return entry
-
-
-#: The summary's fields that time the run and change from run to run (in ``steps[].subphases[]``:
-#: ``wall_s`` and ``build_s``); everything else is the same for the same config.
 
 
 def walk_summary(walk, table: dict | None = None, steps: list | None = None, offsets: list | None = None) -> dict:
@@ -280,13 +273,10 @@ def walk_summary(walk, table: dict | None = None, steps: list | None = None, off
     (``table``: the walk's :func:`walk_table`, when the caller has it already; ``steps``: the
     :func:`step_summary` of every step, ``offsets``: its :func:`hip_offsets`, likewise)."""
     if steps is None:
-        body = walk.spec.body
         if offsets is None:
             offsets = hip_offsets(walk) if walk.steps else []
-        hips = [[np.array([step.origin_x, body.l9]) + o for o in step_offsets]
-                for step, step_offsets in zip(walk.steps, offsets)]
         # every step's swing foot in one pass (a pass per step costs mostly numpy's fixed overheads)
-        feet = swing_foot_clearances(body, walk.steps, hips) if walk.steps else []
+        feet = swing_foot_clearances(walk.spec.body, walk.steps, walk_hips(walk, offsets)) if walk.steps else []
         steps = [step_summary(walk.spec, step, step_offsets, foot)
                  for step, step_offsets, foot in zip(walk.steps, offsets, feet)]
     hip = (table if table is not None else walk_table(walk, offsets)) if walk.steps else None

@@ -293,8 +293,7 @@ class StepController:
             self.scales["swing3"], mode=mode3))
         nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
         path = specs["swing3"].path
-        heel = evaluate(mapped(path, nodes), s3.states[:-1], s3.t[:-1], s3.parameters["F_theta3_moment"],
-                        c)[0].reshape(nodes, path.size1_out(0))[:, 0]
+        heel = evaluate(mapped(path, nodes), s3.states[:-1], s3.t[:-1], s3.parameters["F_theta3_moment"], c)[0]
         notes = lock_rule_notes(stance, b.l1)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, s1, s2, s3],

@@ -8,8 +8,9 @@
   heel height, reported only (no lower bound: the straight leg of short steps cannot keep the
   scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, kinematics/swing_feet.py).
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
-  t_swing, where the heel lands on the ground (eq. 3 geometry). Path functions: heel and toe
-  heights (reported, not constrained: the one unknown is fixed by the landing).
+  t_swing, where the heel lands on the ground (eq. 3 geometry). Path function: the heel's
+  height (reported as the step's heel clearance, not constrained: the one unknown is fixed by
+  the landing).
 """
 from __future__ import annotations
 

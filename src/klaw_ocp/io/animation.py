@@ -25,8 +25,6 @@ frame flickers) and written atomically (a temporary file in the same folder, the
 """
 from __future__ import annotations
 
-import math
-
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,7 +34,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
-from ..kinematics.skeleton import SIDES
+from ..kinematics.skeleton import SIDES, Dimensions
 from .body_plots import CHAINS, chain_points, has_angles, skeleton_at
 from .gait_diagram import gait_events
 from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, PaletteWriter, StaticText
@@ -115,8 +113,8 @@ def footprints(run) -> list[Footprint]:
         return []
     plants.sort(key=lambda p: p[1])
     skeleton = skeleton_at(run, [flat for _, _, flat in plants])
-    body = run.body_model()
-    length = body.l8 + math.sqrt(body.l12 ** 2 - body.l9 ** 2) + body.l13     # heel to toe tip, flat
+    d = Dimensions.of(run.body_model())
+    length = d.heel_back + d.metatarsal_forward + d.toe_length     # heel to toe tip, flat
     prints = []
     for i, (side, t, _) in enumerate(plants):
         heel, toe = _laid_flat(skeleton.landmarks[f"{side[0]}_heel"][i], skeleton.end_sites[f"{side[0]}_toes"][i], length)

@@ -111,8 +111,9 @@ def fixed_decimals_rows(values, decimals: int, separator: str) -> str:
 #   outside [1e-11, 1e15). tests/test_fixed_text.py holds it to ``repr`` on millions of doubles.
 
 _LONG = np.longdouble
-#: the argument above needs a 64-bit significand or wider (x87's 80-bit or a quad long double)
-SHORTEST_EXACT = np.finfo(_LONG).nmant >= 63
+#: the argument above holds for one correctly rounded product in x87's 80-bit (63 fraction bits)
+#: or IEEE quad (112) long double; elsewhere (a 64-bit long double, ppc64le's double-double) repr
+SHORTEST_EXACT = np.finfo(_LONG).nmant in (63, 112)
 _POW_LONG = np.cumprod(np.r_[_LONG(1), np.full(27, 10, _LONG)])      # 10**0 .. 10**27, exact
 _POW_FLOAT = 10.0 ** np.arange(29)
 _POW_INT = np.array([10 ** k for k in range(20)], np.uint64)

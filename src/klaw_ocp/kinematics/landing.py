@@ -81,9 +81,8 @@ def starting_rates(foot, hip, hip_velocity) -> np.ndarray:
     return np.array([theta3[1] - theta3[0], theta4[1] - theta4[0], theta5[1] - theta5[0]]) / _RATE_STEP
 
 
-def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> tuple[float, float]:
-    """The rate r in [0, most] that makes the largest of |at_zero + slope r| least, and that least
-    largest value. The joints' starting rates are linear in the foot's (their velocities are linear
+def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> float:
+    """The rate r in [0, most] that makes the largest of |at_zero + slope r| least. The joints' starting rates are linear in the foot's (their velocities are linear
     in the hip's and the foot's), so the optimum is an end of the range or where two of the lines
     |a_i + b_i r| cross."""
     candidates = [0.0, most]
@@ -96,7 +95,7 @@ def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> tuple
     r = np.clip(np.array(candidates), 0.0, most)
     largest = np.max(np.abs(at_zero[:, None] + slope[:, None] * r[None, :]), axis=0)
     best = int(np.argmin(largest))
-    return float(r[best]), float(largest[best])
+    return float(r[best])
 
 
 def least_landing_knee(make_foot, hip, hip_velocity, usable: bool = True):
@@ -120,7 +119,7 @@ def least_landing_knee(make_foot, hip, hip_velocity, usable: bool = True):
         most = capped.rocker_rate
         at_zero = starting_rates(make_foot(knee, 0.0), hip, hip_velocity)
         slope = (starting_rates(capped, hip, hip_velocity) - at_zero) / most if most > 0 else np.zeros(3)
-        rate, _ = _least_largest(at_zero, slope, most)
+        rate = _least_largest(at_zero, slope, most)
         foot = make_foot(knee, rate)
         largest = float(np.max(np.abs(starting_rates(foot, hip, hip_velocity))))   # (the lines are a model)
         if largest <= LANDING_JOINT_RATE:

@@ -1,17 +1,15 @@
-"""Every step's swing foot in one pass: :meth:`.swing_foot.SwingFoot.lifted_foot` of many steps,
-each on its own guard grid, with the same numbers to the last bit.
+"""Every step's swing foot in one pass (the schedule turned off the ground, and the ankle lifted
+where no foot fits: :meth:`.swing_foot.SwingFoot.lifted_foot`), each step on its own guard grid.
 
 A step's foot costs about 90 small numpy operations, most of their time numpy's fixed overhead on
 a grid of about 200 points; the walk has one per step, and the body and the summary each ask for
-all of them. Here the grids are concatenated: the elementwise parts (the schedule, the ground
+all of them. So the grids are concatenated: the elementwise parts (the schedule, the ground
 limits, the lowest sole point, the knee's bend) run once on the whole, and the two operations that
 run along a step's grid, the running maxima of the rate-limited turn and of the cone envelope, run
 on one row per step of a padded array (the padding is -inf, which a running maximum passes over),
 so no maximum crosses from one step into the next. Only the interpolation from each grid to the
-step's own times stays a call per step (np.interp, the function the per-step form calls).
-
-Where the per-step form skips a sign or a step that needs no turn or lift (``part.any()``,
-``need.any()``), this form computes it anyway: a zero requirement gives a turn of exactly 0.
+step's own times stays a call per step (np.interp). :func:`rate_limited_turn` and
+:func:`ankle_lift` are the one-grid forms.
 """
 from __future__ import annotations
 

@@ -116,14 +116,16 @@ class StanceFoot:
         rate (23° in the first frame at 30 fps). With the knee flexed it starts at most
         LANDING_FOOT_RATE, and the knee takes the rest of the approach."""
         t_flat = attrs.foot_flat_fraction * 2 * t_step
-        straight_pitch, straight_rate = landing_pitch(body, ankle_x, hip, body.l1, hip_velocity)
+        # each knee's landing pitch and still-length rate once (the search asks for a knee's foot
+        # with several rates)
+        poses = {0.0: landing_pitch(body, ankle_x, hip, body.l1, hip_velocity)}
+        straight_pitch = poses[0.0][0]
 
         def landing(knee: float, rate: float | None) -> "StanceFoot":
-            if knee == 0:
-                pitch, still = straight_pitch, straight_rate
-            else:
+            if knee not in poses:
                 pitch, still = landing_pitch(body, ankle_x, hip, float(reach_for_knee_flexion(body, knee)), hip_velocity)
-                still = min(still, LANDING_FOOT_RATE)
+                poses[knee] = pitch, min(still, LANDING_FOOT_RATE)
+            pitch, still = poses[knee]
             rate = still if rate is None else rate
             return cls(FlatFoot(body, ankle_x), pitch, math.radians(attrs.theta6_impact), t_flat,
                        math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
