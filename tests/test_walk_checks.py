@@ -218,7 +218,8 @@ def test_the_body_swing_foot_stays_above_the_ground_everywhere():
         steps[step] = (min(need, lowest.min()), max(most, lift.max()))
         lifted += int((lift > 0).sum())
     assert lifted > 0 and not below, "\n".join(below)
-    needless = [step for step, (need, most) in steps.items() if need >= 0 and most > 0]
+    # (margins: the lowest point is measured on the dense samples, the lift on the guard grid)
+    needless = [step for step, (need, most) in steps.items() if need >= TOE_DIP_BETWEEN_NODES and most > 1e-9]
     assert not needless, needless
 
 
