@@ -14,7 +14,10 @@ the whole Jacobian would give):
     G S_N du = -(g - shift) - G s_N.
 
 Only G S_N, a matrix of the size of u, is solved with. The blocks A_k, B_k come from the compiled
-``sens`` kernel (:class:`.integrator.SubphaseKernels`), one call for all intervals.
+``sens`` kernel (:class:`.integrator.SubphaseKernels`), one call for all intervals. The recursion
+for s is linear in the defects, s_{k+1} = -sum_{j<=k} A_k ... A_{j+1} d_j: a linearisation keeps
+those transition products as one block lower-triangular matrix, so that each of the many steps
+taken with it (chord steps) is a few matrix products, not a Python loop over the intervals.
 
 Chord steps: a solve first checks the residual of its start point (often already converged: it is
 the simulation of the previous step's parameters), then steps with the last Jacobian it has,
@@ -42,6 +45,7 @@ class _Linearisation:
     G: np.ndarray        # (nf, nx)
     S: np.ndarray        # (N + 1, nx, n_free): sensitivities of the nodes to u
     M: np.ndarray        # (nf, n_free): G S_N, the condensed Newton matrix
+    T: np.ndarray        # (N nx, N nx): s_1..s_N = -T d, the transition products A_k ... A_{j+1}
 
 
 @dataclass
@@ -71,23 +75,22 @@ class CondensedNewton:
     def _linearise(self, x0, t, h, u, c, X, free, G):
         starts = np.vstack([x0, X[:-1]])
         xf, jac = self.k.sens(starts, t, h, u, c)
-        nx = self.nx
-        jac = jac.reshape(self.n, nx + self.k.spec.nu, nx).transpose(0, 2, 1)
+        n, nx = self.n, self.nx
+        jac = jac.reshape(n, nx + self.k.spec.nu, nx).transpose(0, 2, 1)
         A, B = jac[:, :, :nx], jac[:, :, nx + np.asarray(free)]
-        S = np.zeros((self.n + 1, nx, len(free)))
-        for k in range(self.n):
+        S = np.zeros((n + 1, nx, len(free)))
+        T = np.zeros((n, nx, n, nx))   # block (k, j): d s_{k+1} / d(-d_j)
+        for k in range(n):
             S[k + 1] = A[k] @ S[k] + B[k]
-        return _Linearisation(A, B, G, S, G @ S[-1]), X - xf.reshape(self.n, nx)
+            if k:
+                T[k, :, :k] = np.einsum("ab,bjc->ajc", A[k], T[k - 1, :, :k])
+            T[k, :, k] = np.eye(nx)
+        return _Linearisation(A, B, G, S, G @ S[-1], T.reshape(n * nx, n * nx)), X - xf.reshape(n, nx)
 
     def _step(self, lin: _Linearisation, d, g):
-        s = np.zeros(self.nx)
-        s_all = np.empty((self.n + 1, self.nx))
-        s_all[0] = s
-        for k in range(self.n):
-            s = lin.A[k] @ s - d[k]
-            s_all[k + 1] = s
-        du = np.linalg.solve(lin.M, -g - lin.G @ s)   # the size of u: factorising costs nothing
-        dX = np.einsum("kij,j->ki", lin.S[1:], du) + s_all[1:]
+        s_all = -(lin.T @ d.reshape(-1)).reshape(self.n, self.nx)
+        du = np.linalg.solve(lin.M, -g - lin.G @ s_all[-1])   # the size of u: factorising costs nothing
+        dX = lin.S[1:] @ du + s_all
         return dX, du
 
     def solve(self, x0, grid, u, free, c, X, shift=None, simulated=False) -> NewtonResult:
