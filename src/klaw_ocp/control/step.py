@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -256,7 +256,7 @@ class StepController:
         ctx.update({f"stance_{k}": stance.parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
         ctx.update(origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
-                   **{f"foot_{k}": v for k, v in asdict(swing_foot).items()}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
+                   **{f"foot_{f.name}": getattr(swing_foot, f.name) for f in fields(swing_foot)}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
                    tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
                    swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
                    **{f"P{i}": coeffs[i] for i in range(5)})

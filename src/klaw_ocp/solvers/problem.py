@@ -196,14 +196,15 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
         counts[max(segments, key=lambda i: lengths[i] / counts[i])] += 1      # the first largest
     while sum(counts) > n:
         counts[min((i for i in segments if counts[i] > 1), key=lambda i: lengths[i] / counts[i])] -= 1
-    # each segment's np.linspace(a, b, k + 1)[1:] in one pass, as linspace computes it: the
-    # node j * ((b - a) / k) + a, and b itself at the segment's end
-    j = np.arange(n + 1.0)
-    j[1:] -= np.repeat(np.cumsum([0, *counts[:-1]]), counts)
-    nodes = j * np.repeat([0.0, *((b - a) / k for a, b, k in zip(edges[:-1], edges[1:], counts))], [1, *counts]) \
-        + np.repeat([t0, *edges[:-1]], [1, *counts])
-    nodes[0], nodes[np.cumsum(counts)] = t0, edges[1:]
-    return nodes
+    # each segment's np.linspace(a, b, k + 1)[1:] as linspace computes it: the node
+    # j * ((b - a) / k) + a, and b itself at the segment's end; in Python floats (the same IEEE
+    # operations), since numpy's per-call costs were most of a grid of twenty nodes
+    nodes = [t0]
+    for a, b, k in zip(edges[:-1], edges[1:], counts):
+        step = (b - a) / k
+        nodes.extend([j * step + a for j in range(1, k)])
+        nodes.append(b)
+    return np.array(nodes)
 
 
 @lru_cache(maxsize=None)
