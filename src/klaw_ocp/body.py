@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -35,6 +36,14 @@ _GAMMA = {1: 0.326, 2: 0.496, 3: 0.323, 4: 0.416}
 #: Order of the dynamic parameter vector handed to the CasADi models (see :meth:`Body.dynamic_parameters`).
 DYNAMIC_PARAMETER_NAMES = ("m1", "m2", "m3", "m4", "l1", "l3", "l4",
                            "r1", "r2", "r3", "r4", "I1", "I2", "I3", "I4", "g")
+
+
+def _derived(compute, doc: str = "") -> cached_property:
+    """A quantity computed from height and mass on first use and kept: the models and the body's
+    kinematics read them thousands of times a walk (a frozen Body never changes them)."""
+    derived = cached_property(compute)
+    derived.__doc__ = doc or None
+    return derived
 
 
 @dataclass(frozen=True)
@@ -64,42 +73,42 @@ class Body:
             raise ConfigError(out_of_range("body.g", self.g, "a positive number in m/s^2"))
 
     # lengths (m)
-    l0 = property(lambda s: _L[0] * s.height, doc="pelvis width")
-    l2 = property(lambda s: _L[2] * s.height, doc="upper body (head-arms-trunk)")
-    l3 = property(lambda s: _L[3] * s.height, doc="thigh")
-    l4 = property(lambda s: _L[4] * s.height, doc="shank")
-    l1 = property(lambda s: s.l3 + s.l4, doc="whole leg, hip to ankle, unloaded")
-    l5 = property(lambda s: _L[5] * s.height, doc="mid foot")
-    l6 = property(lambda s: _L[6] * s.height, doc="toe")
-    l8 = property(lambda s: _L[8] * s.height, doc="hind foot: heel to the ankle's ground projection")
-    l9 = property(lambda s: _L[9] * s.height, doc="ankle height above the foot base")
-    l11 = property(lambda s: _L[11] * s.height, doc="heel to ankle distance")
-    l12 = property(lambda s: _L[12] * s.height, doc="ankle to 1st metatarsal head distance")
-    l13 = property(lambda s: _L[13] * s.height, doc="1st metatarsal head to toe tip distance")
+    l0 = _derived(lambda s: _L[0] * s.height, doc="pelvis width")
+    l2 = _derived(lambda s: _L[2] * s.height, doc="upper body (head-arms-trunk)")
+    l3 = _derived(lambda s: _L[3] * s.height, doc="thigh")
+    l4 = _derived(lambda s: _L[4] * s.height, doc="shank")
+    l1 = _derived(lambda s: s.l3 + s.l4, doc="whole leg, hip to ankle, unloaded")
+    l5 = _derived(lambda s: _L[5] * s.height, doc="mid foot")
+    l6 = _derived(lambda s: _L[6] * s.height, doc="toe")
+    l8 = _derived(lambda s: _L[8] * s.height, doc="hind foot: heel to the ankle's ground projection")
+    l9 = _derived(lambda s: _L[9] * s.height, doc="ankle height above the foot base")
+    l11 = _derived(lambda s: _L[11] * s.height, doc="heel to ankle distance")
+    l12 = _derived(lambda s: _L[12] * s.height, doc="ankle to 1st metatarsal head distance")
+    l13 = _derived(lambda s: _L[13] * s.height, doc="1st metatarsal head to toe tip distance")
 
     # masses (kg)
-    m2 = property(lambda s: _M[2] * s.mass, doc="head-arms-trunk")
-    m3 = property(lambda s: _M[3] * s.mass, doc="thigh")
-    m4 = property(lambda s: _M[4] * s.mass, doc="shank (with foot)")
-    m1 = property(lambda s: s.m3 + s.m4, doc="whole leg")
+    m2 = _derived(lambda s: _M[2] * s.mass, doc="head-arms-trunk")
+    m3 = _derived(lambda s: _M[3] * s.mass, doc="thigh")
+    m4 = _derived(lambda s: _M[4] * s.mass, doc="shank (with foot)")
+    m1 = _derived(lambda s: s.m3 + s.m4, doc="whole leg")
 
     # centres of mass (m); r1 from the ankle, the others from the proximal end
-    r1 = property(lambda s: _R[1] * s.l1, doc="leg centre of mass, from the ankle")
-    r2 = property(lambda s: _R[2] * s.l2, doc="upper-body centre of mass, from the hip")
-    r3 = property(lambda s: _R[3] * s.l3, doc="thigh centre of mass, from the hip")
-    r4 = property(lambda s: _R[4] * s.l4, doc="shank centre of mass, from the knee")
+    r1 = _derived(lambda s: _R[1] * s.l1, doc="leg centre of mass, from the ankle")
+    r2 = _derived(lambda s: _R[2] * s.l2, doc="upper-body centre of mass, from the hip")
+    r3 = _derived(lambda s: _R[3] * s.l3, doc="thigh centre of mass, from the hip")
+    r4 = _derived(lambda s: _R[4] * s.l4, doc="shank centre of mass, from the knee")
 
     # radii of gyration about the centre of mass (m)
-    gamma1 = property(lambda s: _GAMMA[1] * s.l1)
-    gamma2 = property(lambda s: _GAMMA[2] * s.l2)
-    gamma3 = property(lambda s: _GAMMA[3] * s.l3)
-    gamma4 = property(lambda s: _GAMMA[4] * s.l4)
+    gamma1 = _derived(lambda s: _GAMMA[1] * s.l1)
+    gamma2 = _derived(lambda s: _GAMMA[2] * s.l2)
+    gamma3 = _derived(lambda s: _GAMMA[3] * s.l3)
+    gamma4 = _derived(lambda s: _GAMMA[4] * s.l4)
 
     # moments of inertia about the centre of mass (kg m^2), ERRATA section 5
-    I1 = property(lambda s: s.m1 * s.gamma1 ** 2)
-    I2 = property(lambda s: s.m2 * s.gamma2 ** 2)
-    I3 = property(lambda s: s.m3 * s.gamma3 ** 2)
-    I4 = property(lambda s: s.m4 * s.gamma4 ** 2)
+    I1 = _derived(lambda s: s.m1 * s.gamma1 ** 2)
+    I2 = _derived(lambda s: s.m2 * s.gamma2 ** 2)
+    I3 = _derived(lambda s: s.m3 * s.gamma3 ** 2)
+    I4 = _derived(lambda s: s.m4 * s.gamma4 ** 2)
 
     @property
     def omega8(self) -> float:

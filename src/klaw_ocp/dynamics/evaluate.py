@@ -42,13 +42,21 @@ class _Plan:
 
 
 def _plan(fn: ca.Function) -> _Plan:
-    plans = getattr(_local, "plans", None)
-    if plans is None or len(plans) > _MAX_REMEMBERED:
-        plans = _local.plans = {}
-    key = hash(fn)   # CasADi's maps of one Function and length are one object: one plan
-    plan = plans.get(key)
+    # first by the Python object (its hash crosses SWIG, ~2 us), kept alive with its plan so that
+    # its id is not reused; then by CasADi's hash: maps of one Function and length are one
+    # object behind different Python objects, and share a plan
+    by_object = getattr(_local, "by_object", None)
+    if by_object is None or len(by_object) > _MAX_REMEMBERED:
+        by_object = _local.by_object = {}
+        _local.plans = {}
+    entry = by_object.get(id(fn))
+    if entry is not None:
+        return entry[1]
+    key = hash(fn)
+    plan = _local.plans.get(key)
     if plan is None:
-        plan = plans[key] = _Plan(fn)
+        plan = _local.plans[key] = _Plan(fn)
+    by_object[id(fn)] = (fn, plan)
     return plan
 
 

@@ -52,6 +52,10 @@ class SubphaseKernels:
         """Compile or load the kernels now (the first use does it otherwise)."""
         if self._fns is None:
             self._fns = self.library.functions()
+            # each kernel an attribute of its own from now on: the solvers ask for them ~650
+            # times a walk, and every lookup through __getattr__ first fails an ordinary one
+            for name in self.NAMES:
+                setattr(self, name, self._fns[f"{self.spec.name}_{name}"])
 
     def __getattr__(self, name):
         if name in SubphaseKernels.NAMES:

@@ -96,7 +96,7 @@ class CondensedNewton:
     def solve(self, x0, grid, u, free, c, X, shift=None, simulated=False) -> NewtonResult:
         """Newton from node states ``X`` (N, nx) and parameters ``u`` (only ``free`` change).
         ``simulated``: X is the forward simulation of u from x0, so its defects are zero."""
-        t, h = grid[:-1], np.diff(grid)
+        t, h = grid[:-1], grid[1:] - grid[:-1]   # np.diff's numbers, without its wrapper
         free, u, X = tuple(free), np.array(u, float), np.array(X, float)
         shift = 0.0 if shift is None else np.asarray(shift)
         if simulated:
