@@ -29,6 +29,7 @@ as plain Newton's.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,7 +105,7 @@ class CondensedNewton:
             d, g, G = np.zeros_like(X), g - shift, G.reshape(self.nx, -1).T
         else:
             d, g, G = self._residual(x0, t, h, u, c, X, shift)
-        norm, merit = _max_abs(d, g), _two_norm(d, g)
+        norm, merit = _norms(d, g)
         lin, fresh, iterations, jacobians = self._last.get(free), False, 0, 0
         while np.isfinite(norm) and norm > self.tol and iterations < self.max_iterations:
             if lin is None:
@@ -122,7 +123,7 @@ class CondensedNewton:
                 X_new, u_new = X + alpha * dX, u.copy()
                 u_new[list(free)] += alpha * du
                 d_new, g_new, G_new = self._residual(x0, t, h, u_new, c, X_new, shift)
-                merit_new = _two_norm(d_new, g_new)
+                norm_new, merit_new = _norms(d_new, g_new)
                 if merit_new < merit:
                     break
             if not merit_new < merit:
@@ -130,7 +131,6 @@ class CondensedNewton:
                     break             # no descent along Newton's direction: a fallback's turn
                 lin = None            # a stale Jacobian made it worse: undo, renew it here
                 continue
-            norm_new = _max_abs(d_new, g_new)
             X, u, d, g, G = X_new, u_new, d_new, g_new, G_new
             if merit_new > CONTRACTION * merit and norm_new > self.tol:
                 lin = None            # poor contraction: renew the Jacobian at the new point
@@ -138,12 +138,12 @@ class CondensedNewton:
         return NewtonResult(X, u, float(norm), iterations, jacobians, bool(norm <= self.tol))
 
 
-def _two_norm(d, g) -> float:
-    with np.errstate(over="ignore", invalid="ignore"):   # a diverged trial point is just worse
-        value = float(np.sqrt(np.square(d).sum() + np.square(g).sum()))
-    return value if np.isfinite(value) else float("inf")
-
-
-def _max_abs(d, g) -> float:
-    values = np.concatenate([np.ravel(d), np.ravel(g)])
-    return float(np.abs(values).max()) if np.isfinite(values).all() else float("inf")
+def _norms(d, g) -> tuple[float, float]:
+    """max |F| and |F|_2 of the residual F = (d, g); both infinite at a point with an entry that is
+    not finite or beyond 1e150 (a diverged trial point is just worse). The dots are BLAS's: numpy's
+    reductions need an errstate (several us) to overflow quietly, these cannot."""
+    a, b = float(np.abs(d).max()), float(np.abs(g).max())
+    largest = max(a, b)
+    if not (math.isfinite(a) and math.isfinite(b) and largest < 1e150):
+        return float("inf"), float("inf")
+    return largest, math.sqrt(float(np.dot(d.ravel(), d.ravel()) + np.dot(g, g)))
