@@ -31,7 +31,7 @@ import numpy as np
 
 from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
-from .newton import CondensedNewton
+from .newton import CONTRACTION, CondensedNewton
 from .problem import SubphaseProblem, SubphaseSolution, path_bounds
 
 
@@ -67,6 +67,8 @@ class MultipleShootingSolver:
         self.intervals, self.substeps = int(intervals), int(substeps)
         self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
         self._newton: dict = {}   # spec -> CondensedNewton (it keeps the last Jacobian for chord steps)
+        #: (spec, free indices) -> the last single-shooting Jacobian of the initial guesses' steps
+        self._guess_jacobians: dict = {}
 
     def prepare(self, specs) -> None:
         """Compile or load the kernels of ``specs`` now, in parallel (the first run on a machine)."""
@@ -89,9 +91,12 @@ class MultipleShootingSolver:
         simulation of those parameters (then their continuity defects are zero).
 
         A simulation with the given guess initialises the nodes. When its final conditions are
-        far off (a cold start), a few damped Newton steps on the single-shooting residual
-        (finite differences) first bring the parameters near the root, so that the node states
-        start on a trajectory that nearly satisfies them.
+        far off (a cold start, the walk's first steps), a few damped Newton steps on the
+        single-shooting residual first bring the parameters near the root, so that the node states
+        start on a trajectory that nearly satisfies them. Their Jacobian (finite differences, a
+        simulation per free parameter) is kept, as Newton's is (:mod:`.newton`): the next guess
+        of the subphase steps with it first (a chord step, one simulation), and renews it only
+        when that step does not reduce the residual by CONTRACTION.
         """
         u = pb.guess.copy()
         if self._warm(pb):
@@ -99,27 +104,40 @@ class MultipleShootingSolver:
         final = self._final(pb, kernels)
         xs = self._simulate(pb, u, kernels)
         res = final(xs)
-        for _ in range(8):
+        key = (pb.spec, tuple(free))
+        jac, fresh = self._guess_jacobians.get(key), False
+        steps = 0
+        while steps < 8:
             if not np.isfinite(res).all() or np.abs(res).max() < 1e-3 or len(free) != res.size:
                 break
-            jac = np.empty((res.size, len(free)))
-            for j, i in enumerate(free):
-                du = 1e-4 * abs(pb.scale[i]) or 1e-6
-                trial = u.copy(); trial[i] += du
-                jac[:, j] = (final(self._simulate(pb, trial, kernels)) - res) / du
+            if jac is None:
+                jac, fresh = np.empty((res.size, len(free))), True
+                for j, i in enumerate(free):
+                    du = 1e-4 * abs(pb.scale[i]) or 1e-6
+                    trial = u.copy(); trial[i] += du
+                    jac[:, j] = (final(self._simulate(pb, trial, kernels)) - res) / du
+                self._guess_jacobians[key] = jac
             try:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
                 break
-            for damping in (1.0, 0.5, 0.25, 0.125):
+            largest = np.abs(res).max()
+            for damping in (1.0, 0.5, 0.25, 0.125) if fresh else (1.0,):
                 trial = u.copy(); trial[free] += damping * step
                 xs_trial = self._simulate(pb, trial, kernels)
                 res_trial = final(xs_trial)
-                if np.isfinite(res_trial).all() and np.abs(res_trial).max() < np.abs(res).max():
+                if np.isfinite(res_trial).all() and np.abs(res_trial).max() < largest:
                     u, xs, res = trial, xs_trial, res_trial
                     break
             else:
-                break
+                if fresh:
+                    break
+                jac = None        # the kept Jacobian made no progress: renew it here
+                continue
+            steps += 1
+            if np.abs(res).max() > CONTRACTION * largest:
+                jac = None        # poor contraction: renew the Jacobian at the new point
+            fresh = False
         if len(free) == 1 and res.size == 1 and not (np.isfinite(res[0]) and abs(res[0]) < 1e-3):
             call.note("bracket")
             u, xs = self._bracket_guess(pb, free[0], u, kernels)
