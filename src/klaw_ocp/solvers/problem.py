@@ -133,8 +133,8 @@ class SubphaseProblem:
             lower = np.asarray(self.path_lower, float)
             self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
         #: the intervals' lengths (N,), which every simulation of the problem asks for
-        self.h = np.diff(self.grid)
-        if np.any(self.h <= 0):
+        self.h = self.grid[1:] - self.grid[:-1]     # np.diff's numbers, without its wrapper
+        if (self.h <= 0).any():
             raise ValueError(f"{self.spec.name}: time grid must increase strictly")
 
 
@@ -223,5 +223,7 @@ def path_bounds(pb: SubphaseProblem, times: np.ndarray, states: np.ndarray) -> O
         return None
     if callable(pb.path_lower):
         return np.asarray(pb.path_lower(np.asarray(times), np.asarray(states), pb.context), float)
+    if times is pb.grid:      # the grid's own nodes (multiple shooting): the bounds as they are
+        return pb.path_lower
     node = np.clip(np.searchsorted(pb.grid, times, side="right") - 1, 0, pb.grid.size - 1)
     return pb.path_lower[node]
