@@ -296,7 +296,9 @@ class MultipleShootingSolver:
                 break
         if result.path_min < -1e-7:
             result.success = False
-            result.message = f"path constraint violated by {-result.path_min:.3g}"
+            # IPOPT's own status, when it stopped early, stays the message: it is the cause
+            # (failure_cause names the violation from path_min as well)
+            result.message = result.message or f"path constraint violated by {-result.path_min:.3g}"
         return result
 
     def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
