@@ -137,7 +137,8 @@ def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray,
     dz = centre_z + offset[:, 2] - np.where(stance_right, foot_z["right"], foot_z["left"])
     hip_height = np.sqrt(hip_sim[:, 1] ** 2 - dz ** 2)
     centre = np.column_stack([hip_sim[:, 0] - offset[:, 0], hip_height - offset[:, 1], centre_z])
-    return LegPlanes(foot_z, hip_positions(body, centre, pelvis_angles)), centre, lean, hip_sim
+    # the hips are the centre plus the same offsets (hip_positions from the centre: the same sums)
+    return LegPlanes(foot_z, {side: centre + offsets[side] for _, side in SIDES}), centre, lean, hip_sim
 
 
 def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:

@@ -25,7 +25,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..body import Body
-from .leg_geometry import FlatFoot
+from .leg_geometry import FlatFoot, clamp
 
 #: The steepest foot the rules consider (rad): the foot stands almost on its toe.
 MAX_PITCH = math.radians(89)
@@ -95,7 +95,7 @@ def _on_circle(g: HeelUp, dx, dy, dist, r, phi, radius):
     # |pivot + r e(psi) - hip| = radius  <=>  d . e(psi) = k, psi = phi - (p - p0)
     k = (radius ** 2 - dist ** 2 - r ** 2) / (2 * r)
     meet = (dist > 0) & (np.abs(k) <= dist)
-    spread = np.arccos(np.clip(k / np.where(dist > 0, dist, 1.0), -1, 1))
+    spread = np.arccos(clamp(k / np.where(dist > 0, dist, 1.0), -1.0, 1.0))
     psi = np.arctan2(dy, dx) + _SIGNS * spread
     return np.where(meet, g.p0 + _wrap(phi - psi), np.nan), psi
 

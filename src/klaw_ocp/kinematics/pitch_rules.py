@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .leg_geometry import smoothstep
+from .leg_geometry import clamp, smoothstep
 
 #: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 10° of knee
 #: flexion at 1.8 m) at the other leg's heel strike and at toe-off: a fully straight knee is a
@@ -44,7 +44,7 @@ def single_reach_fraction(t, t_flat, t_step):
     it. A leg allowed to go fully straight straightens as the square root of time (up to 3.6° of
     knee in the last 2 ms of single support in configs/accelerate.yaml); kept REACH_FRACTION short,
     its knee meets that limit at a finite rate."""
-    s = np.clip((np.asarray(t, float) - t_flat) / np.maximum(np.asarray(t_step, float) - t_flat, 1e-12), 0.0, 1.0)
+    s = clamp((np.asarray(t, float) - t_flat) / np.maximum(np.asarray(t_step, float) - t_flat, 1e-12), 0.0, 1.0)
     return 1 - (1 - REACH_FRACTION) * s * s * (3 - 2 * s)
 
 
@@ -61,7 +61,7 @@ def rocker_pitch(t, t_flat, p0, rate):
     power (1 - s)^(k + 1), k + 1 = rate·t_flat/|p0| (c = -1). Flat throughout for a standing foot."""
     turning = (t_flat > 0) & (p0 != 0)
     t_flat, p0 = np.where(turning, t_flat, 1.0), np.where(turning, p0, -1.0)
-    s = np.clip(t / t_flat, 0.0, 1.0)
+    s = clamp(t / t_flat, 0.0, 1.0)
     relative_rate = rate * t_flat / -p0
     k = np.maximum(2.0, relative_rate - 1)
     return np.where(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
@@ -70,7 +70,7 @@ def rocker_pitch(t, t_flat, p0, rate):
 def _push_through(t, t_push, t_toe_off, ease):
     """How far along the push-off's line (0 at t_push, 1 at toe-off), eased in over the fraction
     ``ease`` of it (a cubic with zero start rate, joining the line with its slope)."""
-    through = np.clip((t - t_push) / np.maximum(t_toe_off - t_push, 1e-12), 0, 1)
+    through = clamp((t - t_push) / np.maximum(t_toe_off - t_push, 1e-12), 0.0, 1.0)
     if np.any(ease > 0):
         s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
         through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
