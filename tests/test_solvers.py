@@ -98,3 +98,18 @@ def test_time_grid_is_the_linspace_of_each_segment_bit_for_bit(t0, t1, n, breakp
     expected = np.concatenate([[t0], *(np.linspace(grid[a], grid[b], b - a + 1)[1:]
                                        for a, b in zip(on_edges[:-1], on_edges[1:]) if b > a)])
     np.testing.assert_array_max_ulp(grid, expected, maxulp=1)      # numpy's linspace, to its last bit's rounding
+
+
+def test_the_initial_guess_keeps_its_jacobian_for_the_next_solve():
+    """The single-shooting steps of a cold guess keep their finite-difference Jacobian (as Newton
+    keeps its own): a second problem of the subphase (here the periodic start's next trial speed)
+    steps with it first, and solves to the same point as a solver that starts afresh."""
+    first, second = stance_problem(speed_factor=1.2), stance_problem(speed_factor=1.35)
+    solver = make_solver("multiple-shooting")
+    assert solver.solve(first).success
+    free = tuple(i for i, fixed in enumerate(first.fixed) if not fixed)
+    assert (first.spec, free) in solver._guess_jacobians     # the cold guess needed its steps
+    kept, fresh = solver.solve(second), make_solver("multiple-shooting").solve(second)
+    assert kept.success and fresh.success and kept.residual < 1e-9
+    for key in fresh.parameters:
+        assert kept.parameters[key] == pytest.approx(fresh.parameters[key], rel=1e-8, abs=1e-9)
