@@ -124,10 +124,11 @@ class FlatFoot:
         θ6 = p), about the toe tip beyond (θ6 held at meta_off_theta6)."""
         p = np.atleast_1d(np.asarray(pitch, float))
         q = meta_off_theta6
-        heel, ankle, metatarsal = np.moveaxis(foot_pieces(self.body, q).turned(self.ankle_x, p), 1, 0)
+        heel, ankle, metatarsal = foot_pieces(self.body, q).turned(self.ankle_x, p).transpose(1, 0, 2)
         rocker = p < 0
         theta6 = np.where(rocker, rocker_theta6, np.minimum(p, q))
-        toe = np.broadcast_to(self.toe, (len(p), 2)).copy()     # on the ground unless rocking
+        toe = np.empty((len(p), 2))
+        toe[:] = self.toe        # on the ground unless rocking
         if rocker.any():   # toe-up about the heel: the whole foot turns; the toe keeps its angle to the foot
             forward = theta6[rocker] - p[rocker]
             toe[rocker] = metatarsal[rocker] + self.body.l13 * _points(np.cos(forward), np.sin(forward))

@@ -71,7 +71,7 @@ def _push_through(t, t_push, t_toe_off, ease):
     """How far along the push-off's line (0 at t_push, 1 at toe-off), eased in over the fraction
     ``ease`` of it (a cubic with zero start rate, joining the line with its slope)."""
     through = clamp((t - t_push) / np.maximum(t_toe_off - t_push, 1e-12), 0.0, 1.0)
-    if np.any(ease > 0):
+    if (np.asarray(ease) > 0).any():
         s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
         through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
     return through

@@ -100,7 +100,7 @@ def _per_frame(value, name: str, n: int) -> np.ndarray:
         raise ValueError(f"{name}: expected a scalar or shape ({n},), got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains NaN or infinite values")
-    return np.broadcast_to(a, (n,)).copy()   # the caller may write into the angles
+    return np.full(n, a)   # a copy: the caller may write into the angles
 
 
 def _unit(v: np.ndarray, name: str) -> np.ndarray:

@@ -131,7 +131,7 @@ class SubphaseProblem:
             self.fixed = tuple(False for _ in range(self.spec.nu))
         if self.path_lower is not None and not callable(self.path_lower):
             lower = np.asarray(self.path_lower, float)
-            self.path_lower = np.broadcast_to(lower, (self.grid.size, lower.shape[-1])).copy()
+            self.path_lower = np.full((self.grid.size, lower.shape[-1]), lower)
         #: the intervals' lengths (N,), which every simulation of the problem asks for
         self.h = self.grid[1:] - self.grid[:-1]     # np.diff's numbers, without its wrapper
         if (self.h <= 0).any():
