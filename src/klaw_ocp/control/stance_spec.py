@@ -158,7 +158,7 @@ def lock_rule_nodes(states: np.ndarray, l1: float) -> np.ndarray:
     strike (the foot raises the hip at impact, so w > l1 there is the eq. 3 geometry, not an
     early plantar flexion)."""
     w, theta1 = states[:, 0], states[:, 1]
-    return (np.cumsum(w <= l1) > 0) & (theta1 < 0)
+    return np.logical_or.accumulate(w <= l1) & (theta1 < 0)
 
 
 def stance_path_bounds(hip_floor: bool, at_rest: bool = False):

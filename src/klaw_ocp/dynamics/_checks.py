@@ -28,7 +28,7 @@ def as_vector(name: str, value, n: int) -> np.ndarray:
         arr = arr[:, 0]
     if arr.shape != (n,):
         raise ConfigError(out_of_range(name, f"array of shape {arr.shape}", f"shape ({n},)"))
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ConfigError(out_of_range(name, arr.tolist(), f"{n} finite numbers"))
     return arr
 

@@ -70,13 +70,13 @@ class CondensedNewton:
         self._last: dict = {}   # free-index tuple -> _Linearisation (the chord's Jacobian)
 
     def _residual(self, x0, t, h, u, c, X, shift):
-        starts = np.vstack([x0, X[:-1]])
+        starts = np.concatenate([x0[None, :], X[:-1]])   # (vstack's numbers, without its wrapper)
         xf = self.k.prop(starts, t, h, u, c)[0].reshape(self.n, self.nx)
         g, G = self.k.final(X[-1], c)
         return X - xf, g - shift, G.reshape(self.nx, -1).T
 
     def _linearise(self, x0, t, h, u, c, X, free, G):
-        starts = np.vstack([x0, X[:-1]])
+        starts = np.concatenate([x0[None, :], X[:-1]])
         xf, jac = self.k.sens(starts, t, h, u, c)
         n, nx = self.n, self.nx
         jac = jac.reshape(n, nx + self.k.spec.nu, nx).transpose(0, 2, 1)
