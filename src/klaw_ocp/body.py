@@ -110,6 +110,12 @@ class Body:
     I3 = _derived(lambda s: s.m3 * s.gamma3 ** 2)
     I4 = _derived(lambda s: s.m4 * s.gamma4 ** 2)
 
+    @cached_property
+    def metatarsal_reach(self) -> float:
+        """How far ahead of the ankle the 1st metatarsal head lies with the foot flat (m):
+        sqrt(l12² − l9²), l12 the ankle to the metatarsal head and l9 the ankle's height."""
+        return math.sqrt(self.l12 ** 2 - self.l9 ** 2)
+
     @property
     def omega8(self) -> float:
         """Angle (rad) at the heel between the sole and the heel-ankle line: cos(omega8) = l8/l11 (eq. 3)."""

@@ -55,7 +55,7 @@ def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -
     term). In closed form; it was a regula falsi to 1e-13 rad, thousands of evaluations a walk."""
     kx, ky = float(knee[0]), float(knee[1])
     l4, l9, l13 = body.l4, body.l9, body.l13
-    reach = math.sqrt(body.l12 ** 2 - l9 ** 2)
+    reach = body.metatarsal_reach
     c5, s5 = math.cos(theta5), math.sin(theta5)
     a = -l4 - reach * c5 - l9 * s5 - l13 * math.cos(theta5 + theta6)
     b = reach * s5 - l9 * c5 + l13 * math.sin(theta5 + theta6)

@@ -106,7 +106,7 @@ class FlatFoot:
 
     @cached_property
     def metatarsal(self) -> np.ndarray:
-        return _readonly([self.ankle_x + math.sqrt(self.body.l12 ** 2 - self.body.l9 ** 2), 0.0])
+        return _readonly([self.ankle_x + self.body.metatarsal_reach, 0.0])
 
     @cached_property
     def toe(self) -> np.ndarray:

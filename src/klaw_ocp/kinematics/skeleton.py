@@ -17,7 +17,6 @@ positive). A joint with fewer angles uses the subset. World rotations compose pa
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -86,7 +85,7 @@ class Dimensions:
         thoracic_unit = (C7_T1_LEVEL - T12_L1_LEVEL) * h / len(THORACIC)
         t1_t2_level = C7_T1_LEVEL * h - thoracic_unit
         return cls(pelvis_width=body.l0, thigh=body.l3, shank=body.l4, ankle_height=body.l9,
-                   heel_back=body.l8, metatarsal_forward=math.sqrt(body.l12 ** 2 - body.l9 ** 2),
+                   heel_back=body.l8, metatarsal_forward=body.metatarsal_reach,
                    toe_length=body.l13, hip_height=hip_height,
                    l5_above_hip=L5_S1_LEVEL * h - hip_height,
                    lumbar_unit=(T12_L1_LEVEL - L5_S1_LEVEL) * h / len(LUMBAR),

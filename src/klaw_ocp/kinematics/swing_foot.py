@@ -71,7 +71,7 @@ def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray
     """Heights above the ground (m) of the heel and the toe tip of a foot whose ankle is at height
     ``ankle_y`` (the foot of :func:`klaw_ocp.dynamics.foot_points_sx`, vectorised)."""
     alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5     # the backward sole direction
-    reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+    reach = body.metatarsal_reach
     heel = ankle_y + body.l8 * np.sin(alpha) + body.l9 * np.cos(alpha)
     toe = ankle_y - reach * np.sin(alpha) + body.l9 * np.cos(alpha) - body.l13 * np.sin(alpha + theta6)
     return heel, toe
@@ -81,7 +81,7 @@ def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.n
     """:meth:`SwingFoot.ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
     # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
     # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
-    reach = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
+    reach = body.metatarsal_reach
     heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
     toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
     toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
@@ -176,5 +176,5 @@ def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
     of :func:`sole_heights` (the metatarsal head is the lowest where the toes are bent up)."""
     heel, toe = sole_heights(body, ankle_y, shank_angle, theta5, theta6)
     alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5
-    metatarsal = ankle_y - math.sqrt(body.l12 ** 2 - body.l9 ** 2) * np.sin(alpha) + body.l9 * np.cos(alpha)
+    metatarsal = ankle_y - body.metatarsal_reach * np.sin(alpha) + body.l9 * np.cos(alpha)
     return np.minimum(np.minimum(heel, toe), metatarsal)
