@@ -184,12 +184,13 @@ def ankle_angle(theta3, theta4, sole) -> np.ndarray:
 
 
 def clamp(x, lo, hi):
-    """``np.clip(x, lo, hi)``'s numbers (NaN stays NaN) for half its time: np.clip passes
-    through Python wrappers, ~3 us on a few samples, and the virtual leg clamps hundreds of
-    times a walk."""
+    """``np.clip(x, lo, hi)``'s numbers (NaN stays NaN) as two ufuncs, for half its time: np.clip
+    passes through Python wrappers, ~3 us on a few samples, and the virtual leg and the swing
+    foot clamp hundreds of times a walk."""
     return np.minimum(np.maximum(x, lo), hi)
 
 
 def smoothstep(u):
+    """3u² - 2u³ of ``u`` clamped to [0, 1]."""
     u = clamp(u, 0.0, 1.0)
     return u * u * (3 - 2 * u)

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .leg_geometry import knee_flexion_for_reach, reach_for_knee_flexion
-from .swing_foot import GUARD_RATE, SCHEDULE_FIELDS, _clip, _ground_clip, lowest_sole_point, schedule_angles
+from .leg_geometry import clamp, knee_flexion_for_reach, reach_for_knee_flexion
+from .swing_foot import GUARD_RATE, SCHEDULE_FIELDS, _ground_clip, lowest_sole_point, schedule_angles
 
 
 class _Grids:
@@ -90,7 +90,7 @@ def _turned(body, feet: list, on: _Grids, ankle_y, shank):
     """The schedule of every step on its grid, and the turn of the ground guard (rad) there:
     (scheduled θ5, θ6, turn), concatenated in order."""
     schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
-    scheduled, theta6 = schedule_angles(on.t, schedule, _clip)
+    scheduled, theta6 = schedule_angles(on.t, schedule, clamp)
     required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
     turn = _rate_limited_turn(on, required)
     # the rate-limited turn lags where a large requirement falls off quickly (the schedule itself
@@ -106,7 +106,7 @@ def _at_times(feet: list, times: list, on: _Grids, *on_grid):
     of ``on_grid`` (values on the grids) interpolated linearly to those times."""
     counts = [len(t) for t in times]
     at = {name: np.repeat([getattr(f, name) for f in feet], counts) for name in SCHEDULE_FIELDS}
-    theta5, theta6 = schedule_angles(np.concatenate(times), at, _clip)
+    theta5, theta6 = schedule_angles(np.concatenate(times), at, clamp)
     out = [np.empty(len(theta5)) for _ in on_grid]
     for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
         grid, mine = on.t[start:end], slice(stop - len(t), stop)

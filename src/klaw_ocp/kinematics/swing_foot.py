@@ -36,6 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .leg_geometry import clamp
+
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
                    "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
@@ -62,11 +64,6 @@ def schedule_angles(t, s: dict, clip):
     return theta5, theta6
 
 
-def _clip(x, lo, hi):
-    """np.clip as two ufuncs: np.clip's fixed overhead is most of its time on a swing's samples."""
-    return np.minimum(np.maximum(x, lo), hi)
-
-
 def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray, np.ndarray]:
     """Heights above the ground (m) of the heel and the toe tip of a foot whose ankle is at height
     ``ankle_y`` (the foot of :func:`klaw_ocp.dynamics.foot_points_sx`, vectorised)."""
@@ -90,7 +87,7 @@ def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.n
     for radius, phase in (heel, toe):
         centre = math.pi / 2 - phase
         centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
-        half = np.arccos(_clip(-ankle_y / radius, -1.0, 1.0))
+        half = np.arccos(clamp(-ankle_y / radius, -1.0, 1.0))
         fits &= np.abs(math.pi - centre) <= half
         # a point nearer the ankle than the ankle's height is above the ground at every angle:
         # no limit (its arc's edges, π either side, are where it points straight down)
@@ -99,7 +96,7 @@ def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.n
         upper = np.where(free, upper, np.minimum(upper, centre + half))
     to_theta5 = shank - math.pi / 2
     level = math.pi + to_theta5
-    return np.where(fits, _clip(theta5, lower + to_theta5, upper + to_theta5), level), theta6
+    return np.where(fits, clamp(theta5, lower + to_theta5, upper + to_theta5), level), theta6
 
 
 @dataclass(frozen=True)
@@ -119,7 +116,7 @@ class SwingFoot:
         """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
         t = np.asarray(t, float)
         # the fields by name (dataclasses.asdict deep-copies: most of this method's time)
-        theta5, theta6 = schedule_angles(t, {name: getattr(self, name) for name in SCHEDULE_FIELDS}, _clip)
+        theta5, theta6 = schedule_angles(t, {name: getattr(self, name) for name in SCHEDULE_FIELDS}, clamp)
         return np.full(t.shape, theta5), np.full(t.shape, theta6)   # (broadcast_to's copy costs several times more)
 
     def ground_limits(self, body, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:

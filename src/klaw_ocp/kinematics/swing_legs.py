@@ -25,9 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.kinematics import foot_points_arrays
-from .leg_geometry import leg_fk, leg_ik, smoothstep
+from .leg_geometry import clamp, leg_fk, leg_ik, smoothstep
 from .swing_feet import lifted_feet
-from .swing_foot import SCHEDULE_FIELDS, _clip, schedule_angles
+from .swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .walk_samples import swing_curves
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
@@ -51,8 +51,8 @@ def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, lan
     feet = [s.swing_foot for s in walk.steps]
     t_to, t1, t2, t_hs = (np.array([getattr(f, name) for f in feet])[step]
                           for name in ("t_toe_off", "t1", "t2", "t_heel_strike"))
-    leaves = 1 - smoothstep(np.clip((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)), 0.0, 1.0))
-    lands = smoothstep(np.clip((tau - t2) / np.maximum(t_hs - t2, 1e-12), 0.0, 1.0))
+    leaves = 1 - smoothstep((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)))     # (smoothstep clamps to [0, 1])
+    lands = smoothstep((tau - t2) / np.maximum(t_hs - t2, 1e-12))
     towards = ankle + leaves[:, None] * toe_off[0][step] + lands[:, None] * landing[0][step] - own_hip
     reached = np.hypot(*towards.T)
     distance = dynamic + np.maximum(leaves, lands) * (reached - dynamic)
@@ -73,7 +73,7 @@ def _end_offsets(walk, swing, steps, t, simulated_hip, ankles, pitches) -> tuple
         model_shank, model_ankle = _model_leg(body, swing, steps, t, simulated_hip)
         feet = [walk.steps[k].swing_foot for k in steps]     # their schedules, in one pass
         theta5 = schedule_angles(np.asarray(t, float), {name: np.array([getattr(f, name) for f in feet])
-                                                        for name in SCHEDULE_FIELDS}, _clip)[0]
+                                                        for name in SCHEDULE_FIELDS}, clamp)[0]
         ankle_offset[steps] = ankles - model_ankle
         # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
         shank_offset[steps] = (theta5 - np.pi / 2 + pitches) - model_shank
