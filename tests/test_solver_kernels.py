@@ -340,7 +340,7 @@ def test_condensed_newton_step_is_the_full_newton_step(problems):
     X = np.vstack([X, X[-1]]) + 1e-3 * rng.standard_normal((n, nx))   # defects and final conditions off
     d, g, G = newton._residual(pb.x0, t, h, pb.guess, pb.context, X, 0.0)
     lin, _ = newton._linearise(pb.x0, t, h, pb.guess, pb.context, X, tuple(free), G)
-    dX, du = newton._step(lin, d, g)
+    assert lin.T is not None           # the default grid keeps the dense transition products
     jac = np.zeros((n * nx + len(g), n * nx + len(free)))
     for i in range(n):
         jac[i * nx:(i + 1) * nx, i * nx:(i + 1) * nx] = np.eye(nx)
@@ -349,7 +349,10 @@ def test_condensed_newton_step_is_the_full_newton_step(problems):
         jac[i * nx:(i + 1) * nx, n * nx:] = -lin.B[i]
     jac[n * nx:, (n - 1) * nx:n * nx] = G
     full = np.linalg.solve(jac, -np.concatenate([d.ravel(), g]))
-    np.testing.assert_allclose(np.concatenate([dX.ravel(), du]), full, rtol=1e-8, atol=1e-12)
+    # both forms of the defects' recursion: the dense products, and the loop of finer grids
+    for form in (lin, replace(lin, T=None)):
+        dX, du = newton._step(form, d, g)
+        np.testing.assert_allclose(np.concatenate([dX.ravel(), du]), full, rtol=1e-8, atol=1e-12)
 
 
 def test_chord_steps_reach_the_root_of_fresh_newton(problems):

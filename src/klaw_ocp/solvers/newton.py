@@ -17,7 +17,8 @@ Only G S_N, a matrix of the size of u, is solved with. The blocks A_k, B_k come 
 ``sens`` kernel (:class:`.integrator.SubphaseKernels`), one call for all intervals. The recursion
 for s is linear in the defects, s_{k+1} = -sum_{j<=k} A_k ... A_{j+1} d_j: a linearisation keeps
 those transition products as one block lower-triangular matrix, so that each of the many steps
-taken with it (chord steps) is a few matrix products, not a Python loop over the intervals.
+taken with it (chord steps) is a few matrix products, not a Python loop over the intervals (on
+grids up to DENSE_TRANSITIONS_MAX node states; finer ones run the recursion).
 
 Chord steps: a solve first checks the residual of its start point (often already converged: it is
 the simulation of the previous step's parameters), then steps with the last Jacobian it has,
@@ -31,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -38,17 +40,25 @@ import numpy as np
 CONTRACTION = 0.25
 
 
+#: up to this many node states (N nx) a linearisation keeps the transition products as one dense
+#: matrix T: (N nx)² numbers, 115 kB at the default 20 intervals of a stance; a finer grid (up to
+#: 500 intervals, 200 MB and slower than the loop from ~100 intervals) takes the recursion itself
+DENSE_TRANSITIONS_MAX = 300
+
+
 @dataclass
 class _Linearisation:
-    """Jacobian blocks of one point, with the condensed matrix factorised."""
+    """Jacobian blocks of one point, with the condensed matrix inverted."""
     A: np.ndarray        # (N, nx, nx)
     B: np.ndarray        # (N, nx, n_free)
     G: np.ndarray        # (nf, nx)
     S: np.ndarray        # (N + 1, nx, n_free): sensitivities of the nodes to u
-    M: np.ndarray        # (nf, n_free): G S_N, the condensed Newton matrix
-    T: np.ndarray        # (N nx, N nx): s_1..s_N = -T d, the transition products A_k ... A_{j+1}
-    M_inv: np.ndarray    # M's inverse (None: M is singular): the size of u, so an inverse costs
-                         # nothing, and each chord step then spares numpy.linalg.solve's ~10 us
+    #: (N nx, N nx): s_1..s_N = -T d, the transition products A_k ... A_{j+1}; None on grids of
+    #: more than DENSE_TRANSITIONS_MAX node states, where the recursion runs
+    T: Optional[np.ndarray]
+    #: the inverse of M = G S_N, the condensed Newton matrix (None: M is singular): it is the size
+    #: of u, so inverting costs nothing, and each chord step then spares numpy.linalg.solve's ~10 us
+    M_inv: Optional[np.ndarray]
 
 
 @dataclass
@@ -82,23 +92,32 @@ class CondensedNewton:
         jac = jac.reshape(n, nx + self.k.spec.nu, nx).transpose(0, 2, 1)
         A, B = jac[:, :, :nx], jac[:, :, nx + np.asarray(free)]
         S = np.zeros((n + 1, nx, len(free)))
-        T = np.zeros((n, nx, n, nx))   # block (k, j): d s_{k+1} / d(-d_j)
         for k in range(n):
             S[k + 1] = A[k] @ S[k] + B[k]
-            if k:
-                T[k, :, :k] = np.einsum("ab,bjc->ajc", A[k], T[k - 1, :, :k])
-            T[k, :, k] = np.eye(nx)
-        M = G @ S[-1]
+        T = None
+        if n * nx <= DENSE_TRANSITIONS_MAX:
+            T = np.zeros((n, nx, n, nx))   # block (k, j): d s_{k+1} / d(-d_j)
+            for k in range(n):
+                if k:
+                    T[k, :, :k] = np.einsum("ab,bjc->ajc", A[k], T[k - 1, :, :k])
+                T[k, :, k] = np.eye(nx)
+            T = T.reshape(n * nx, n * nx)
         try:
-            M_inv = np.linalg.inv(M)
+            M_inv = np.linalg.inv(G @ S[-1])
         except np.linalg.LinAlgError:
             M_inv = None
-        return _Linearisation(A, B, G, S, M, T.reshape(n * nx, n * nx), M_inv), X - xf.reshape(n, nx)
+        return _Linearisation(A, B, G, S, T, M_inv), X - xf.reshape(n, nx)
 
     def _step(self, lin: _Linearisation, d, g):
-        s_all = -(lin.T @ d.reshape(-1)).reshape(self.n, self.nx)
         if lin.M_inv is None:
             raise np.linalg.LinAlgError("singular condensed Newton matrix")
+        if lin.T is not None:
+            s_all = -(lin.T @ d.reshape(-1)).reshape(self.n, self.nx)
+        else:                      # the recursion s_{k+1} = A_k s_k - d_k itself
+            s_all, s = np.empty((self.n, self.nx)), np.zeros(self.nx)
+            for k in range(self.n):
+                s = lin.A[k] @ s - d[k]
+                s_all[k] = s
         du = lin.M_inv @ (-g - lin.G @ s_all[-1])
         dX = lin.S[1:] @ du + s_all
         return dX, du
