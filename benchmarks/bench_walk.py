@@ -62,8 +62,6 @@ REFERENCE_STANCE_SOLVE_MS = 0.38
 TARGETS = (("realtime_factor", ">=", 50.0), ("ms_over_ps_time_ratio", "<=", 1.0),
            ("realtime_factor_tracking", ">=", 10.0), ("cold_cli_s", "<=", 5.0), ("cold_cli_plots_s", "<=", 3.0),
            ("peak_rss_mb", "<=", 300.0), ("realtime_factor_walk_and_angles", ">=", 100.0))
-#: the frame rate of the body's angles in the pipeline (``output.fps``'s default)
-ANGLES_FPS = 30.0
 
 
 def _mode(config, method: str, stance: str, repeats: int) -> dict:
@@ -122,6 +120,16 @@ def _step_writing(config, repeats: int) -> dict:
             "extra_ms_per_step": 1e3 * (step_s + finish_s - once_s) / steps}
 
 
+def _median_s(fn, repeats: int) -> float:
+    """The median of ``repeats`` timed calls of ``fn`` (s)."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
 def _plots(walk, repeats: int) -> tuple[float, float]:
     """The seven plots of ``walk`` rendered in memory: the first time (with matplotlib's import) and
     the median of ``repeats`` more (s)."""
@@ -131,12 +139,7 @@ def _plots(walk, repeats: int) -> tuple[float, float]:
     from klaw_ocp.io.plots import render_plots
     render_plots(run)
     first = time.perf_counter() - t0
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        render_plots(run)
-        times.append(time.perf_counter() - t0)
-    return first, statistics.median(times)
+    return first, _median_s(lambda: render_plots(run), repeats)
 
 
 def _animation(walk) -> tuple[float, float]:
@@ -179,18 +182,13 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False, cpus=None) -> t
     return wall, int(stdout.split()[-1]) / 1024.0
 
 
-def _kinematics(walk, dynamics_s: float, repeats: int) -> dict:
-    """The body's 56 angles at ANGLES_FPS on their own (``body_motion``, the kinematics: virtual
-    legs, swing feet, pelvis, upper body; median of ``repeats``), and the walk with its angles
-    (issue #22: the dynamics' median plus this) as a real-time factor."""
-    body_motion(walk, ANGLES_FPS)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        body_motion(walk, ANGLES_FPS)
-        times.append(time.perf_counter() - t0)
-    kinematics = statistics.median(times)
-    return {"kinematics_s": kinematics, "walk_and_angles_s": dynamics_s + kinematics,
+def _kinematics(walk, fps: float, dynamics_s: float, repeats: int) -> dict:
+    """The body's 56 angles at the config's ``output.fps`` on their own (``body_motion``, the
+    kinematics: virtual legs, swing feet, pelvis, upper body; median of ``repeats``), and the walk
+    with its angles (issue #22: the dynamics' median plus this) as a real-time factor."""
+    body_motion(walk, fps)
+    kinematics = _median_s(lambda: body_motion(walk, fps), repeats)
+    return {"fps": fps, "kinematics_s": kinematics, "walk_and_angles_s": dynamics_s + kinematics,
             "realtime_factor_walk_and_angles": walk.duration / (dynamics_s + kinematics)}
 
 
@@ -207,7 +205,7 @@ def _table(rows: list, cli: list, plots: tuple[float, float], animation: tuple[f
         cells = [f"{v['median_ms']:7.2f} ({v['median_iterations']:g})" for v in r["subphases"].values()]
         lines.append(f"{r['mode']:34s} " + " ".join(f"{c:>14s}" for c in cells))
     lines.append("")
-    lines.append(f"kinematics (the body's 56 angles at {ANGLES_FPS:g} fps, multiple-shooting walk): "
+    lines.append(f"kinematics (the body's 56 angles at {kinematics['fps']:g} fps, multiple-shooting walk): "
                  f"{1e3 * kinematics['kinematics_s']:.1f} ms; the walk with its angles "
                  f"{kinematics['walk_and_angles_s']:.4f} s, {kinematics['realtime_factor_walk_and_angles']:.1f}x real time")
     lines.append(f"plots (7 PNGs of the multiple-shooting walk, one process): first {plots[0]:.2f} s (imports matplotlib), "
@@ -236,7 +234,7 @@ def main() -> None:
     config = load_config(args.config)
     rows = [_mode(config, method, stance, args.repeats) for method, stance in MODES]
     walk = simulate_walk(walk_spec(config, "multiple-shooting"))
-    kinematics = _kinematics(walk, rows[0]["dynamics_s"], args.repeats)
+    kinematics = _kinematics(walk, config.output.fps, rows[0]["dynamics_s"], args.repeats)
     plots = _plots(walk, args.repeats)
     animation = _animation(walk)
     steps = _step_writing(config, args.repeats)

@@ -235,13 +235,13 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     results: list[dict | None] = [None] * len(tasks)
 
     def finished() -> list[dict]:
-        return [{**task["values"], **result} for task, result in zip(tasks, results) if result is not None]
+        return [row for row in results if row is not None]
 
     def done(i: int, row: dict) -> None:
-        results[i] = row
+        results[i] = {**tasks[i]["values"], **row}      # the swept values first, as sweep.csv has them
         bar.update()
         if on_row is not None:
-            on_row({**tasks[i]["values"], **row})
+            on_row(results[i])
 
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:

@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,14 +25,14 @@ MIN_CURVE_P_TRAVEL = 0.4
 #: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
 TOE_OFF_RATE_WINDOW = 0.1
 
-from ..kinematics.swing_foot import SwingFoot
+from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from ..kinematics.virtual_leg import toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
-from .swing_law import SWING_CONTEXT
+from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
 from .swing_spec import swing_specs
 
 
@@ -256,7 +256,7 @@ class StepController:
         ctx.update({f"stance_{k}": stance.parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
         ctx.update(origin_x=origin[0], origin_y=origin[1],
                    l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
-                   **{f"foot_{f.name}": getattr(swing_foot, f.name) for f in fields(swing_foot)}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
+                   **{key: getattr(swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
                    tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
                    swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
                    **{f"P{i}": coeffs[i] for i in range(5)})

@@ -117,7 +117,7 @@ SHORTEST_EXACT = np.finfo(_LONG).nmant in (63, 112)
 _POW_LONG = np.cumprod(np.r_[_LONG(1), np.full(27, 10, _LONG)])      # 10**0 .. 10**27, exact
 _POW_FLOAT = 10.0 ** np.arange(29)
 _POW_INT = np.array([10 ** k for k in range(20)], np.uint64)
-_U = [np.uint64(10 ** k) for k in range(20)]
+_U = list(_POW_INT)      # the same powers as numpy scalars: a list lookup is cheaper than the array's
 #: |y - exact| < 2**-7.5, with room: closer than this to a rounding's half or an interval's end
 #: is too close to call
 _MARGIN = 2.0 ** -6
@@ -166,7 +166,6 @@ def _shortest_digits(values: np.ndarray):
     fast &= (whole >= _U[16]) & (whole < _POW_INT[17])
     half_ulp = np.ldexp(_POW_FLOAT[k], exponent2 - 54)
     tens, hundreds = whole // _U[1], whole // _U[2]
-    ok = fast
     digits, count, found = whole, np.full(len(values), 17), np.zeros(len(values), bool)
     for base, unit, p in ((hundreds, 100.0, 15), (tens, 10.0, 16), (whole, 1.0, 17)):
         below = (whole - base * _U[17 - p]).astype(float) + f   # y less the candidate rounded down
@@ -174,11 +173,11 @@ def _shortest_digits(values: np.ndarray):
         distance = np.abs(below - unit * up) - half_ulp
         unsure = (np.abs(below - unit / 2) <= _MARGIN) | (np.abs(distance) <= _MARGIN)
         take = ~found & (distance < 0)
-        ok &= found | ~unsure
+        fast &= found | ~unsure
         digits = np.where(take, base + up.astype(np.uint64), digits)
         count = np.where(take, p, count)
         found |= take
-    fast = ok & found
+    fast &= found
     carried = digits >= _POW_INT[count]                           # rounded up to 10^p
     digits = np.where(carried, digits // _U[1], digits)
     decpt = 17 - k + carried

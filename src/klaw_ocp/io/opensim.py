@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..body import Body
+from ..errors import one_line
 from ..kinematics.skeleton import (ANGLE_NAMES, LUMBAR, THORACIC, frames_array, joint_index,
                                    local_rotations, rest_root_position, zxy_angles)
 from .fixed_text import fixed_decimals_rows
@@ -136,7 +137,7 @@ def mot_text(table: dict, body: Body, model_scale: float = 1.0, name: str = "wal
     endheader), the column labels, then one tab-separated row per frame."""
     columns = mot_columns(table, body, model_scale)
     n = len(columns["time"])
-    title = " ".join(str(name).split()) or "walk"
+    title = one_line(name) or "walk"
     head = (f"{title}\nversion=1\nnRows={n}\nnColumns={len(MOT_COLUMNS)}\ninDegrees=yes\nendheader\n"
             + "\t".join(MOT_COLUMNS) + "\n")
     return head + fixed_decimals_rows(np.column_stack([columns[c] for c in MOT_COLUMNS]), MOT_DECIMALS, "\t")

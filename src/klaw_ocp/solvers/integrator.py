@@ -137,9 +137,9 @@ def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.F
     # computed once, so the same numbers): the models' pieces (forces, hip height, foot points)
     # each take their own sin and cos of the same angles, 33 trigonometric calls a stance
     # right-hand side and 74 a swing1 one, 9 and 13 after it
-    rhs = ca.Function(f"{spec.name}_rhs", [xs, ts, us, cs], [f], {"cse": True})
-    rhs_jac = ca.Function(f"{spec.name}_rhs_jac", [xs, ts, us, cs], [f, ca.densify(ca.jacobian(f, ca.vertcat(xs, us)))],
-                          {"cse": True})
+    # (the interval needs the right-hand side alone, its sensitivities the Jacobian with it)
+    outputs = [f, ca.densify(ca.jacobian(f, ca.vertcat(xs, us)))] if sensitivities else [f]
+    rhs = ca.Function(f"{spec.name}_rhs{'_jac' if sensitivities else ''}", [xs, ts, us, cs], outputs, {"cse": True})
     x, t, h = ca.MX.sym("x", nx), ca.MX.sym("t"), ca.MX.sym("h")
     u, c = ca.MX.sym("u", nu), ca.MX.sym("c", spec.nc)
     dt = h / substeps
@@ -149,7 +149,7 @@ def rk4_interval(spec: SubphaseSpec, substeps: int, sensitivities: bool) -> ca.F
     def stage(xk, tk, Sk):
         if not sensitivities:
             return rhs(xk, tk, u, c), None
-        k, jac = rhs_jac(xk, tk, u, c)
+        k, jac = rhs(xk, tk, u, c)
         return k, ca.mtimes(jac[:, :nx], Sk) + ca.horzcat(seed_u, jac[:, nx:])
 
     xk, tk = x, t
