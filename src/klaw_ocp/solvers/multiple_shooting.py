@@ -32,7 +32,7 @@ import numpy as np
 from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
 from .newton import CONTRACTION, CondensedNewton
-from .problem import SubphaseProblem, SubphaseSolution, path_bounds
+from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
 
 
 class _Call:
@@ -108,20 +108,17 @@ class MultipleShootingSolver:
         jac, fresh = self._guess_jacobians.get(key), False
         steps = 0
         while steps < 8:
-            if not np.isfinite(res).all() or np.abs(res).max() < 1e-3 or len(free) != res.size:
+            largest = np.abs(res).max()
+            if not np.isfinite(res).all() or largest < 1e-3 or len(free) != res.size:
                 break
             if jac is None:
-                jac, fresh = np.empty((res.size, len(free))), True
-                for j, i in enumerate(free):
-                    du = 1e-4 * abs(pb.scale[i]) or 1e-6
-                    trial = u.copy(); trial[i] += du
-                    jac[:, j] = (final(self._simulate(pb, trial, kernels)) - res) / du
+                jac = fd_jacobian(lambda trial: final(self._simulate(pb, trial, kernels)), u, res, free, pb.scale)
+                fresh = True
                 self._guess_jacobians[key] = jac
             try:
                 step = np.linalg.solve(jac, -res)
             except np.linalg.LinAlgError:
                 break
-            largest = np.abs(res).max()
             for damping in (1.0, 0.5, 0.25, 0.125) if fresh else (1.0,):
                 trial = u.copy(); trial[free] += damping * step
                 xs_trial = self._simulate(pb, trial, kernels)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .events import EventIntegrator
 from .integrator import prepare_kernels, subphase_kernels
-from .problem import SubphaseProblem, SubphaseSolution, path_bounds
+from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
 
 
 class PlainShootingSolver:
@@ -240,15 +240,10 @@ class PlainShootingSolver:
         shots = 1
         if not np.all(np.isfinite(res)):
             return u, final(u), shots
-        def fd_jacobian(u, res):
-            jac = np.zeros((len(rows), len(free)))
-            for col, i in enumerate(free):
-                du = 1e-4 * abs(pb.scale[i]) or 1e-6
-                trial = u.copy(); trial[i] += du
-                jac[:, col] = (final(trial)[rows] - res) / du
-            return jac
+        def jacobian(u, res):
+            return fd_jacobian(lambda trial: final(trial)[rows], u, res, free, pb.scale)
 
-        jac, fresh = fd_jacobian(u, res), True
+        jac, fresh = jacobian(u, res), True
         shots += len(free)
         for _ in range(self.max_iterations):
             if np.max(np.abs(res)) <= self.tolerance:
@@ -270,7 +265,7 @@ class PlainShootingSolver:
                 if fresh:
                     break
                 # Broyden's update drifted: refresh the Jacobian by finite differences once
-                jac, fresh = fd_jacobian(u, res), True
+                jac, fresh = jacobian(u, res), True
                 shots += len(free)
                 continue
             ds, dr = damping * step, new - res
@@ -285,11 +280,7 @@ class PlainShootingSolver:
         the spec's pairing (it can, at slow walks), the swapped pairing contracts instead.
         """
         (i0, j0), (i1, j1) = pairs
-        jac = np.zeros((2, 2))
-        for col, i in enumerate((i0, i1)):
-            du = 1e-4 * abs(pb.scale[i]) or 1e-6
-            trial = u.copy(); trial[i] += du
-            jac[:, col] = (final(trial)[[j0, j1]] - residual[[j0, j1]]) / du
+        jac = fd_jacobian(lambda trial: final(trial)[[j0, j1]], u, residual[[j0, j1]], (i0, i1), pb.scale)
         direct, swapped = abs(jac[0, 0] * jac[1, 1]), abs(jac[0, 1] * jac[1, 0])
         if np.isfinite(direct + swapped) and swapped > direct:
             self._note("swapped-pairing")

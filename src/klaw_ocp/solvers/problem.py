@@ -213,6 +213,18 @@ def mapped(fn: ca.Function, n: int) -> ca.Function:
     return fn.map(n)
 
 
+def fd_jacobian(residual, u: np.ndarray, res: np.ndarray, columns, scale: np.ndarray) -> np.ndarray:
+    """Forward differences of ``residual`` (parameters -> an array like ``res``, its value at
+    ``u``) by the parameters ``columns``, each stepped by 1e-4 of its typical size ``scale[i]``
+    (1e-6 where that is 0): the single-shooting Jacobians both solver modes start from."""
+    jac = np.empty((np.size(res), len(columns)))
+    for col, i in enumerate(columns):
+        du = 1e-4 * abs(scale[i]) or 1e-6
+        trial = u.copy(); trial[i] += du
+        jac[:, col] = (residual(trial) - res) / du
+    return jac
+
+
 def path_bounds(pb: SubphaseProblem, times: np.ndarray, states: np.ndarray) -> Optional[np.ndarray]:
     """Lower bounds of the path functions at the samples ``times`` (None: no inequality).
 
