@@ -19,10 +19,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+import yaml
 
 import klaw_ocp
 from klaw_ocp.config import ExperimentConfig, load_config
-from klaw_ocp.config_yaml import MAX_YAML_BYTES, parse_yaml
+from klaw_ocp.config_yaml import MAX_YAML_BYTES, MAX_YAML_DEPTH, parse_yaml
 from klaw_ocp.errors import ConfigError, GaitLimitError, KlawError
 
 SRC = Path(__file__).resolve().parents[1] / "src"
@@ -369,3 +370,62 @@ def test_the_shipped_configs_are_far_inside_the_yaml_bounds():
     for path in sorted((SRC.parent / "configs").glob("*.yaml")):
         assert path.stat().st_size < MAX_YAML_BYTES / 10
         load_config(path)
+
+
+class _EarlyNestingParser(yaml.SafeLoader):
+    """A parser with a nesting limit of its own, below ours, met before any event is yielded (as
+    libyaml's scanner meets its 1000 levels on a deep flow collection): whatever such a parser
+    says, the refusal is ours."""
+
+    def check_event(self, *choices):
+        if self.flow_level == 0 and not getattr(self, "_scanned", False):
+            self._scanned = True
+            depth = level = 0
+            for ch in self.buffer:
+                level += (ch in "[{") - (ch in "]}")
+                depth = max(depth, level)
+            if depth > 5:
+                raise yaml.scanner.ScannerError("while increasing flow level", None,
+                                                "some wording of this library's own", self.get_mark())
+        return super().check_event(*choices)
+
+
+@pytest.mark.parametrize("loader", ["libyaml-or-pure", "pure-python", "early-nesting-limit"])
+@pytest.mark.parametrize("text, path", [
+    ("walk: " + "[" * 5000 + "]" * 5000 + "\n", "walk[0][0][0][0][0][0][0][0][0]"),
+    ("walk: " + "{a: " * 12 + "1" + "}" * 12 + "\n", "walk.a.a.a.a.a.a.a.a.a"),
+    ("a:\n" + "".join("  " * i + "- \n" for i in range(1, 30)), "a[0][0][0][0][0][0][0][0][0]"),
+])
+def test_the_nesting_limit_is_ours_whichever_parser_notices_first(monkeypatch, loader, text, path):
+    import klaw_ocp.config_yaml as cy
+    if loader == "pure-python":
+        monkeypatch.setattr(cy, "_Loader", yaml.SafeLoader)
+    elif loader == "early-nesting-limit":
+        monkeypatch.setattr(cy, "_Loader", _EarlyNestingParser)
+    with pytest.raises(ConfigError) as err:
+        parse_yaml(text, "c.yaml")
+    line = str(err.value)
+    assert "\n" not in line
+    assert line.startswith(f"{path}: got mappings and lists nested 11 deep"), line
+    assert line.endswith(f"allowed at most {MAX_YAML_DEPTH} (docs/limits.md)"), line
+
+
+@pytest.mark.parametrize("text, value", [
+    ("1e-9", 1e-9), ("5e3", 5000.0), ("-2E-4", -2e-4), ("+1e2", 100.0), (".5e3", 500.0),
+    ("1.0e5", 1e5), ("1.5e-3", 1.5e-3), ("2.e1", 20.0), ("0.5", 0.5), ("5", 5), ("-3", -3),
+    ("1e", "1e"), ("e5", "e5"), ("1.2.3e4", "1.2.3e4"), ("'1e-9'", "1e-9"), (".inf", float("inf")),
+])
+def test_a_number_with_an_exponent_is_a_float_everywhere(tmp_path, text, value):
+    """YAML 1.2 reads ``1e-9`` as a number; PyYAML (YAML 1.1) as text: one resolver in the loader
+    reads it as a number in config files and in ``--set`` and ``--vary`` values alike."""
+    from klaw_ocp.config_paths import parse_set, parse_vary
+    for got in (parse_yaml(f"x: {text}\n")["x"], parse_yaml(f"x: [{text}]\n")["x"][0],
+                parse_set(f"solver.tolerance={text}")[1], parse_vary(f"walk.speed={text},1")[1][0]):
+        assert type(got) is type(value) and (got == value or got != got), (text, got)
+
+
+def test_a_tolerance_written_1e_9_is_accepted_from_a_file(tmp_path):
+    (tmp_path / "c.yaml").write_text(BASE + "solver: {tolerance: 1e-9}\n", encoding="utf-8")
+    config = load_config(tmp_path / "c.yaml")
+    assert config.solver.tolerance == 1e-9
+    assert load_config(tmp_path / "c.yaml", sets=["solver.tolerance=1E-8"]).solver.tolerance == 1e-8

@@ -183,3 +183,31 @@ def test_empty_or_non_mapping_file(tmp_path, text, start):
 def test_directory_is_not_a_config(tmp_path):
     with pytest.raises(ConfigError, match=r"^config: got .*allowed a readable"):
         load_config(tmp_path)
+
+
+@pytest.mark.parametrize("sets, steps, duration", [
+    (["walk.steps=300"], 300, None),
+    (["walk.steps=300", "walk.duration=20"], None, 20),
+    (["walk.duration=20", "walk.steps=7"], 7, None),
+    (["walk.speed=4"], None, 12),
+])
+def test_a_set_of_one_alternative_replaces_the_other(sets, steps, duration):
+    """natural_walk.yaml gives a duration: ``--set walk.steps=300`` walks 300 steps (the last
+    alternative set wins), where it used to be refused as "both steps and duration"."""
+    config = load_config(ROOT / "configs" / "natural_walk.yaml", sets)
+    assert (config.walk.steps, config.walk.duration) == (steps, duration)
+
+
+def test_a_file_giving_both_alternatives_is_still_refused(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("name: t\nbody: {height: 1.8, mass: 80}\nwalk: {speed: 5, steps: 4, duration: 3}\n")
+    with pytest.raises(ConfigError, match=r"^walk: got duration 3 and steps 4, allowed exactly one of"):
+        load_config(path)
+    assert load_config(path, ["walk.duration=null"]).walk.steps == 4
+
+
+def test_a_vary_of_one_alternative_replaces_the_other():
+    from klaw_ocp.sweep import expand
+    _, tasks = expand(ROOT / "configs" / "natural_walk.yaml", {"walk.steps": [3, 5]})
+    assert [t["mapping"]["walk"].get("duration") for t in tasks] == [None, None]
+    assert [t["mapping"]["walk"]["steps"] for t in tasks] == [3, 5]

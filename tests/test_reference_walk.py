@@ -259,7 +259,7 @@ def _subphase_cases():
             yield pytest.param(mode, name, FINAL_TOL, id=f"{mode}-{name}")
 
 
-@pytest.mark.parametrize("mode, name, tol", _subphase_cases())
+@pytest.mark.parametrize("mode, name, tol", list(_subphase_cases()))
 def test_reference_parameters_reach_the_final_conditions(mode, name, tol):
     misses = final_condition_misses(mode, name)
     assert max(misses.values()) <= tol, f"{name}: final-condition miss per step {misses} > {tol:g}"

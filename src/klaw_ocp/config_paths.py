@@ -60,8 +60,14 @@ def parse_set(text: str) -> tuple[str, object]:
     return path, _parse_scalar(value.strip(), path, flag="--set", allowed=_SET_ALLOWED)
 
 
+#: Fields of which a config gives exactly one: setting one (``--set walk.steps=300`` on a config
+#: with a ``duration``, or ``--vary`` over it) removes the others, as the user means.
+ALTERNATIVE_FIELDS: tuple[tuple[str, ...], ...] = (("walk.duration", "walk.steps"),)
+
+
 def set_path(mapping: dict, path: str, value, flag: str = "--vary") -> None:
-    """Set ``mapping[a][b][c] = value`` for ``path`` "a.b.c", creating missing mappings."""
+    """Set ``mapping[a][b][c] = value`` for ``path`` "a.b.c", creating missing mappings; a value
+    (not null) for one of ALTERNATIVE_FIELDS removes the other fields of its group."""
     keys = path.split(".")
     node = mapping
     for depth, key in enumerate(keys[:-1]):
@@ -73,6 +79,14 @@ def set_path(mapping: dict, path: str, value, flag: str = "--vary") -> None:
             raise ConfigError(f"{flag} {path}: got {where} = {short_repr(node, 60)} in the config, allowed a path "
                               f"through mappings only")
     node[keys[-1]] = value
+    if value is None:
+        return
+    for group in ALTERNATIVE_FIELDS:
+        if path in group:
+            for other in group:
+                parent, _, key = other.rpartition(".")
+                if other != path and parent == ".".join(keys[:-1]):
+                    node.pop(key, None)
 
 
 def apply_sets(mapping: dict, sets) -> dict:
@@ -102,11 +116,6 @@ def _parse_scalar(item: str, path: str, flag: str = "--vary", allowed: str = _VA
         value = parse_yaml(item, f"{flag} {path}")
     except ConfigError:
         raise ConfigError(f"{flag} {path}: got {short_repr(item)}, allowed {allowed}") from None
-    if isinstance(value, str):  # YAML 1.1 reads 1e-3 as a string; a number is meant
-        try:
-            return float(value)
-        except ValueError:
-            return value
     if not isinstance(value, (bool, int, float, str, type(None))):   # a list, a mapping, a date
         raise ConfigError(f"{flag} {path}: got {short_repr(item)}, allowed {allowed}")
     return value

@@ -6,6 +6,7 @@ Every failure is one :class:`~klaw_ocp.errors.ConfigError` line naming its sourc
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import yaml
@@ -25,10 +26,16 @@ MAX_YAML_NODES = 20_000
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)   # libyaml when present: ~20x faster
 
+#: A number with an exponent and no dot (``1e-9``, ``5e3``, ``-2E-4``, ``.5e3``) or an exponent
+#: without its sign (``1.0e5``): YAML 1.2 and every reader take them for floats, YAML 1.1 (PyYAML)
+#: for text. The one resolver every config file and ``--set``/``--vary`` value is read with.
+YAML12_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+
 
 class _BoundedLoader(_Loader):
     """The safe loader (no Python tags), whose constructors report a value they cannot build
-    (a 30 February, an integer of 5000 digits, an empty ``!!float``) as a YAML error at its line."""
+    (a 30 February, an integer of 5000 digits, an empty ``!!float``) as a YAML error at its line,
+    and which reads YAML 1.2's exponent floats as floats (YAML12_FLOAT)."""
 
     def construct_object(self, node, deep=False):
         try:
@@ -42,6 +49,9 @@ class _BoundedLoader(_Loader):
                                                     node.start_mark) from None
 
 
+_BoundedLoader.add_implicit_resolver("tag:yaml.org,2002:float", YAML12_FLOAT, list("-+0123456789."))
+
+
 class _Frame:
     """An open mapping or sequence while the events are checked."""
     __slots__ = ("mapping", "anchor", "start", "level", "deepest", "children", "keys", "key")
@@ -51,7 +61,7 @@ class _Frame:
         self.deepest, self.children, self.keys, self.key = level, 0, {}, None
 
 
-def _check_events(text: str, source: str) -> None:
+def _check_events(text: str, source: str, loader=None) -> None:
     """Refuse, on the parse events alone, a document nested deeper than MAX_YAML_DEPTH, with more
     than MAX_YAML_NODES nodes once its aliases are expanded, with an alias inside its own anchor,
     or with a key given twice in one mapping."""
@@ -115,7 +125,7 @@ def _check_events(text: str, source: str) -> None:
                 frame.key = None
         frame.children += 1
 
-    for event in yaml.parse(text, Loader=_Loader):
+    for event in yaml.parse(text, Loader=loader or _Loader):
         if isinstance(event, yaml.DocumentStartEvent):
             stack, anchors = [], {}
         elif isinstance(event, yaml.ScalarEvent):
@@ -158,6 +168,16 @@ def parse_yaml(text: str, source: str = "config"):
         _check_events(text, source)
         return yaml.load(text, Loader=_BoundedLoader)   # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
+        # Our limits are ours whichever parser notices first: libyaml scans a flow collection
+        # ahead of its events and may stop a deep one with its own nesting limit (PyYAML 6.0.4:
+        # 1000 levels) before the event check sees level MAX_YAML_DEPTH + 1. PyYAML's own parser
+        # yields its events one at a time, so it meets our checks first (this costs time only
+        # for a document that is refused anyway).
+        if _Loader is not yaml.SafeLoader:
+            try:
+                _check_events(text, source, loader=yaml.SafeLoader)
+            except yaml.YAMLError:
+                pass
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
