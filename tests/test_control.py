@@ -20,6 +20,7 @@ from hypothesis import example, given, settings, strategies as st
 from klaw_ocp.body import Body
 from klaw_ocp.control import curve_p as ds
 from klaw_ocp.control.gains import control_gains
+from klaw_ocp.control.step import body_context
 from klaw_ocp.control.stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS, stance_forces
 from klaw_ocp.control.swing_law import (SWING_CONTEXT, curve_p, swing1_forces, swing1_rhs, swing2_torques,
                                         swing3_torque)
@@ -97,7 +98,7 @@ def test_hip_height_reference_ends_low_peaks_mid_step_with_flat_ends():
 
 
 def stance_setup():
-    ctx = dict(zip(STANCE_CONTEXT.names[:16], BODY.dynamic_parameters()))
+    ctx = body_context(BODY)
     ctx.update(k_w=2e4, v_w=500.0, k_t=300.0, d_t=40.0, theta2_ref=0.05, k_y=10.0, c_y=0.05, t_off=0.24,
                t_step=0.6, y_start=0.85, y_end=0.86, excursion=0.03, locked=0.0, theta1_target=0.3, w_target=0.87)
     p = dict(F_theta1_magnitude=30.0, pa_offset=0.01, F_theta1_brake=-5.0,

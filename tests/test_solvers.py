@@ -7,6 +7,7 @@ import pytest
 from klaw_ocp import Body
 from klaw_ocp.control.gains import control_gains
 from klaw_ocp.control.stance_law import STANCE_CONTEXT
+from klaw_ocp.control.step import body_context
 from klaw_ocp.control.stance_spec import stance_fixed, stance_spec, stance_unknowns
 from klaw_ocp.errors import ConfigError
 from klaw_ocp.gait import LocomotionAttributes, step_constraints, state_phase_timings
@@ -30,7 +31,7 @@ def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None, *
     con = step_constraints(body, 0.7746, attrs)
     tim = state_phase_timings(107.58, attrs)
     g = control_gains(body, attrs)
-    ctx = dict(zip(STANCE_CONTEXT.names[:16], body.dynamic_parameters()))
+    ctx = body_context(body)
     y = con.hip_y - body.l9 if y_ref is None else y_ref
     ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=0.0, k_y=g.k_y, c_y=g.c_y,
                t_off=tim.t_theta1_off, t_step=tim.t_step, y_start=y, y_end=y, excursion=0.04, locked=0.0,

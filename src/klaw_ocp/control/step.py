@@ -13,27 +13,38 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..body import Body
+from ..body import DYNAMIC_PARAMETER_NAMES, Body
 from ..dynamics import knee_lock_map, stance_hips
 from ..dynamics.evaluate import evaluate
 from ..errors import ConvergenceError
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from ..solvers.problem import mapped
-#: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
-#: (steady steps: about 0.43 from the toe-under-knee rule). See docs/solvers.md, "The first step".
-MIN_CURVE_P_TRAVEL = 0.4
-#: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
-TOE_OFF_RATE_WINDOW = 0.1
-
-from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
-from ..kinematics.virtual_leg import toe_off_pitch
-from .curve_p import curve_p_coefficients, swing1_end_posture
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
-from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
+from .step_stages import DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, swing_context
 from .swing_spec import swing_specs
+
+#: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
+#: regions and tolerances then act alike on each). F_theta1: 5 % of the body's weight times l1;
+#: the stance's pa knots and offset 2 cm; swing1's F_theta3 amplitude 20 % of the leg's weight
+#: times l1; swing2's knee amplitude 10 % of the shank's weight times l4 and its recovery actuator
+#: 0.05 rad; swing3's heel-down moment 5 % of the leg's weight times l1.
+F_THETA1_SCALE_REL = 0.05
+STANCE_OTHER_SCALE = 0.02
+SWING1_SCALE_REL = 0.2
+SWING2_KNEE_SCALE_REL = 0.1
+SWING2_RECOVERY_SCALE = 0.05
+SWING3_SCALE_REL = 0.05
+#: Swing2's recovery (§4.3): where the toe would touch the ground, the thigh's holding target is
+#: moved by steps of this much (rad; negative: the thigh further forward, the hip torque larger).
+SWING2_RECOVERY_STEP = -0.005
+
+
+def body_context(body: Body) -> dict:
+    """The body's entries of every subphase context (:data:`klaw_ocp.body.DYNAMIC_PARAMETER_NAMES`)."""
+    return dict(zip(DYNAMIC_PARAMETER_NAMES, body.dynamic_parameters()))
 
 
 @dataclass
@@ -133,17 +144,17 @@ class StepController:
         solver.prepare([stance_spec(lock_rule, False), *self.swing_specs.values()])
         self.guesses: dict = {}
         self.previous_states: dict = {}
-        weight = body.mass * body.g
-        stance_scale = {"F_theta1_magnitude": 0.05 * weight * body.l1, "F_theta1_brake": 0.05 * weight * body.l1}
-        self.stance_scale = {n: stance_scale.get(n, 0.02) for n in STANCE_PARAMETERS.names}
-        self.scales = {"swing1": np.array([0.2 * body.m1 * body.g * body.l1]),
-                       "swing2": np.array([0.1 * body.m4 * body.g * body.l4, 0.05]),
-                       "swing3": np.array([0.05 * body.m1 * body.g * body.l1])}
+        torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1
+        stance_scale = {"F_theta1_magnitude": torque, "F_theta1_brake": torque}
+        self.stance_scale = {n: stance_scale.get(n, STANCE_OTHER_SCALE) for n in STANCE_PARAMETERS.names}
+        self.scales = {"swing1": np.array([SWING1_SCALE_REL * body.m1 * body.g * body.l1]),
+                       "swing2": np.array([SWING2_KNEE_SCALE_REL * body.m4 * body.g * body.l4, SWING2_RECOVERY_SCALE]),
+                       "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
     # -- contexts ------------------------------------------------------------------------------
     def stance_context(self, plan, inp: StepInput) -> dict:
         b, g, t = self.body, self.gains, plan.timings
-        ctx = dict(zip(STANCE_CONTEXT.names[:16], b.dynamic_parameters()))
+        ctx = body_context(b)
         ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=g.theta2_ref, k_y=g.k_y, c_y=g.c_y,
                    t_off=t.t_theta1_off, t_step=t.t_step, y_start=inp.y_start,
                    y_end=plan.constraints.hip_y - b.l9, excursion=inp.excursion, locked=0.0,
@@ -203,75 +214,50 @@ class StepController:
 
     # -- the whole step ------------------------------------------------------------------------
     def solve_step(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StepResult:
-        b, a, t, con = self.body, self.attrs, plan.timings, plan.constraints
+        """One step in its stages: the stance (solved), the hind leg's double support to toe-off,
+        curve P and the swing foot, the swing context, the three swings (solved), the heel's
+        clearance before it strikes."""
+        b, t = self.body, plan.timings
         stance = self.solve_stance(plan, inp, index, at_rest)
-        sctx = self.stance_context(plan, inp)
+        stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
-
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
+        ds = hind_leg_double_support(self.attrs, plan, stance, hips, hip_vels, inp.hind_foot)
+        t1 = t.t_ds + t.t_swing1_end
+        curve = plan_curve_p(b, self.attrs, plan, ds, hips[node_at(stance.t, t1)])
+        c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve)
+        x_to = stance.states[node_at(stance.t, t.t_ds)]
+        swings = self.solve_swings(plan, index, x_to, ds, c, stance.events if not at_rest else None,
+                                   stance.t[node_at(stance.t, t.t_ds)])
+        return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
+                          t_start=plan.t_start, subphases=[stance, *swings],
+                          double_support=ds.as_dict(), curve_p=curve.as_dict(),
+                          final_stance_state=stance.final_state,
+                          heel_clearance_min=self.heel_clearance_min(swings[-1], c),
+                          plan=plan, notes=lock_rule_notes(stance, b.l1),
+                          hip_reference={"y_start": inp.y_start, "y_end": stance_ctx["y_end"],
+                                         "excursion": inp.excursion},
+                          hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_hips=hips,
+                          swing_foot=curve.swing_foot)
 
-        def node(time):
-            return int(np.argmin(np.abs(stance.t - time)))
-
-        # hind leg: the previous stance's virtual leg (kinematics.virtual_leg) goes on through the
-        # double support in the same foot periods, to toe-off, where swing1 starts from it
-        t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
-        k_to = node(t_to)
-        x_to, hip_to, hip_vel_to = stance.states[k_to], hips[k_to], hip_vels[k_to]
-        hind = inp.hind_foot
-        t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
-        pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
-        pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, math.radians(a.toe_off_foot_pitch), con.theta3)
-        hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds)
-        ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
-        # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
-        # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached
-        # full stretch, where its inverse kinematics is singular), and an infinitesimal difference
-        # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
-        window = TOE_OFF_RATE_WINDOW * t_to
-        # the double support's nodes, then toe-off and the window's start, in one pass
-        m = len(ds_nodes)
-        legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window)],
-                           np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to]))
-        ds = {"t": stance.t[ds_nodes], "theta3": legs.theta3[:m], "theta4": legs.theta4[:m], "pitch": legs.pitch[:m]}
-        th3_to, th4_to, ankle_to = float(legs.theta3[m]), float(legs.theta4[m]), legs.ankle[m]
-        th3d_to = float(legs.theta3[m] - legs.theta3[m + 1]) / window
-
-        # curve P: from the toe-off ankle to the ankle with the toe under the knee at t1
-        theta5_to, theta6_to = float(legs.theta5[m]), float(legs.theta6[m])
-        theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
-        hip_t1 = hips[node(t1)]
-        knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
-        # the foot reaches its heel-strike angles by t1, dorsiflexing further if the toe needs it
-        ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs, a.toe_clearance + 0.01 * b.l1)
-        a0, x0 = ankle_to[1], ankle_to[0]
-        a_min = ankle_t1[1]
-        d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
-        a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
-                    max(a0, a_min) + 0.01 * b.l1)
-        coeffs = curve_p_coefficients(a0, a_max, a_min, a.swing_peak_position * d_travel, d_travel)
-        swing_foot = SwingFoot(t_to, t1, t2, t.t_step, theta5_to, theta6_to, theta5_t1, theta5_hs, theta6_hs)
-
-        ctx = dict(sctx)
-        ctx.update({f"stance_{k}": stance.parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
-        ctx.update(origin_x=origin[0], origin_y=origin[1],
-                   l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
-                   **{key: getattr(swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)}, k_h=self.gains.k_h, d_h=self.gains.d_h, theta3_target=con.theta3,
-                   tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=x0, baumgarte=50.0,
-                   swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
-                   **{f"P{i}": coeffs[i] for i in range(5)})
-        c = SWING_CONTEXT.pack(ctx)
-        specs = self.swing_specs
+    def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
+                     stance_events, t_toe_off: float) -> list[SubphaseSolution]:
+        """Swing1 from the toe-off posture, swing2 from swing1's end (the knee's rate from swing1's
+        kinematic constraint), swing3 from the knee locked at t2 (eq. 5). ``stance_events``: the
+        stance's lock events, None in the closing step (whose stance has none)."""
+        t = plan.timings
+        t1, t2 = t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
+        specs, a = self.swing_specs, self.attrs
         # The swing re-simulates the stance (swing_law.py), so with plain shooting's lock events it
         # must start in the stance's lock state at toe-off: locked after an early 'leg_too_long'
         # not yet undone by 'leg_vertical'; in the closing step, whose stance has no lock events,
         # with the swing specs' events disarmed. Each later subphase starts in the mode the one
         # before ended in. Multiple shooting has no events: its modes are unlocked and unused.
-        mode1 = NO_LOCK_EVENTS if at_rest else lock_mode(stance.events, stance.t[k_to])
+        mode1 = NO_LOCK_EVENTS if stance_events is None else lock_mode(stance_events, t_toe_off)
         c1 = lock_context(c, mode1)
         s1 = self._solve(index, SubphaseProblem(
-            specs["swing1"], np.concatenate([x_to, [th3_to, th4_to, th3d_to]]),
-            time_grid(t_to, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 1), self.scales["swing1"],
+            specs["swing1"], np.concatenate([x_to, [ds.theta3_toe_off, ds.theta4_toe_off, ds.theta3d_toe_off]]),
+            time_grid(t.t_ds, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 1), self.scales["swing1"],
             mode=mode1))
         x_end1 = s1.final_state
         mode2 = lock_mode(s1.events, mode=mode1)
@@ -282,27 +268,19 @@ class StepController:
         s2 = self._solve(index, SubphaseProblem(
             specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c2,
             guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance, -np.inf]),
-            recovery_step=np.array([0.0, -0.005]), mode=mode2))
+            recovery_step=np.array([0.0, SWING2_RECOVERY_STEP]), mode=mode2))
         x_end2 = s2.final_state
-        knee = knee_lock_map(b, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
-        th3d_locked = knee[2]
+        knee = knee_lock_map(self.body, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         mode3 = lock_mode(s2.events, mode=mode2)
         s3 = self._solve(index, SubphaseProblem(
-            specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], th3d_locked]]),
+            specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], knee[2]]]),
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), lock_context(c, mode3), self._guess("swing3", 1),
             self.scales["swing3"], mode=mode3))
-        nodes = len(s3.t) - 1   # the heel's clearance before it strikes, all nodes in one call
-        path = specs["swing3"].path
-        heel = evaluate(mapped(path, nodes), s3.states[:-1], s3.t[:-1], s3.parameters["F_theta3_moment"], c)[0]
-        notes = lock_rule_notes(stance, b.l1)
-        return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
-                          t_start=plan.t_start, subphases=[stance, s1, s2, s3],
-                          double_support={k: np.array(v) for k, v in ds.items()},
-                          curve_p={"a0": a0, "a_max": a_max, "a_min": a_min, "C": a.swing_peak_position * d_travel,
-                                   "D": d_travel, "x0": x0, "coefficients": coeffs.tolist(),
-                                   "theta5_toe_off": theta5_to, "theta6_toe_off": theta6_to, "theta5_t1": theta5_t1},
-                          final_stance_state=stance.final_state, heel_clearance_min=float(heel.min()) if heel.size else 0.0,
-                          plan=plan, notes=notes,
-                          hip_reference={"y_start": inp.y_start, "y_end": sctx["y_end"], "excursion": inp.excursion},
-                          hind_foot=hind, hind_samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]), stance_hips=hips,
-                          swing_foot=swing_foot)
+        return [s1, s2, s3]
+
+    def heel_clearance_min(self, swing3: SubphaseSolution, c: np.ndarray) -> float:
+        """The heel's lowest height over swing3 before it strikes (all nodes in one call)."""
+        nodes = len(swing3.t) - 1
+        path = self.swing_specs["swing3"].path
+        heel = evaluate(mapped(path, nodes), swing3.states[:-1], swing3.t[:-1], swing3.parameters["F_theta3_moment"], c)[0]
+        return float(heel.min()) if heel.size else 0.0

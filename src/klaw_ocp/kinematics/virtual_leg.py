@@ -335,7 +335,7 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
 #: fraction of the double support: a heel rising at once would bend the knee as the square root of
 #: time (3.6° in the first 2 ms from rest, 15° in steps of 0.5 m at 167 steps/min). A bent leg does
 #: not ease: a slow heel there lets the hip moving away straighten it, again as a square root
-#: (3.2° in 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step.py) so that the
+#: (3.2° in 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step_stages.py) so that the
 #: toe-off posture and rate that start swing1 follow from the push's line.
 PUSH_EASE = 0.5
 PUSH_EASE_FROM_REST = PUSH_EASE

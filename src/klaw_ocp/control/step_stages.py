@@ -1,0 +1,168 @@
+"""The kinematic stages of a step between its stance and its swings (section 4.3), each a plain
+function of what the stage before it handed on:
+
+1. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
+   to toe-off, where swing1 starts from its posture ("the continuing stance phase of the hind leg
+   is completed kinematically", §3);
+2. :func:`plan_curve_p`: curve P, the ankle path of swing1, from the toe-off ankle to the ankle
+   with the toe under the knee at t1, and the swing foot's angle schedule;
+3. :func:`swing_context`: the numbers the swing models read (the stance context, the solved stance
+   parameters, the foot schedule, curve P, the holding gains and the subphase times).
+
+:class:`klaw_ocp.control.step.StepController` runs them in this order between the stance solve and
+the three swing solves. Frames: world x forward, y up, ground y = 0.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..body import Body
+from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
+from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
+from .curve_p import curve_p_coefficients, swing1_end_posture
+from .stance_law import STANCE_PARAMETERS
+from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
+
+#: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
+#: (steady steps: about 0.43 from the toe-under-knee rule). See docs/solvers.md, "The first step".
+MIN_CURVE_P_TRAVEL = 0.4
+#: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
+TOE_OFF_RATE_WINDOW = 0.1
+#: At t1 the toe is held this fraction of l1 above ``toe_clearance`` (swing1's end posture), so
+#: that swing2, whose path constraint is the clearance itself, does not start on its bound.
+TOE_MARGIN_AT_T1_REL = 0.01
+#: Curve P's peak a_max is at least this fraction of l1 above the higher of its two ends, so the
+#: quartic has a peak between them at every speed (a_max falls with speed).
+CURVE_P_PEAK_MARGIN_REL = 0.01
+#: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
+#: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
+CURVE_P_BAUMGARTE = 50.0
+
+
+@dataclass(frozen=True)
+class DoubleSupport:
+    """The hind leg from this step's heel strike to its toe-off, as the virtual leg moves it."""
+    #: stance times of the double support's nodes (s) and the leg's angles there (rad)
+    t: np.ndarray
+    theta3: np.ndarray
+    theta4: np.ndarray
+    pitch: np.ndarray
+    #: the leg at toe-off: thigh, knee, the thigh's rate (the mean over TOE_OFF_RATE_WINDOW),
+    #: the ankle (world, m) and the foot's ankle and toe angles θ5, θ6
+    theta3_toe_off: float
+    theta4_toe_off: float
+    theta3d_toe_off: float
+    ankle_toe_off: np.ndarray
+    theta5_toe_off: float
+    theta6_toe_off: float
+    #: the hind leg's virtual leg with its double support, and its samples (leg stance time, world hips)
+    hind_foot: StanceFoot
+    samples: tuple
+
+    def as_dict(self) -> dict:
+        """The samples summary.json and the walk checks read (``t``, ``theta3``, ``theta4``, ``pitch``)."""
+        return {"t": self.t, "theta3": self.theta3, "theta4": self.theta4, "pitch": self.pitch}
+
+
+@dataclass(frozen=True)
+class CurveP:
+    """Curve P (§4.3), ``y(s) = sum A_i s^(4-i)`` over the ankle's travel s since toe-off, and the
+    swing foot's angle schedule that goes with it."""
+    a0: float                      # the ankle's height at toe-off (m)
+    a_max: float                   # its peak, at s = C (m)
+    a_min: float                   # its height at t1, at s = D (m)
+    C: float                       # = swing_peak_position D
+    D: float                       # the ankle's travel from toe-off to t1 (m)
+    x0: float                      # the toe-off ankle's x (world, m)
+    coefficients: np.ndarray       # A_0 .. A_4, highest power first
+    theta5_toe_off: float
+    theta6_toe_off: float
+    theta5_t1: float               # the ankle angle at t1 (its heel-strike value, or more dorsiflexed)
+    swing_foot: SwingFoot
+
+    def as_dict(self) -> dict:
+        return {"a0": self.a0, "a_max": self.a_max, "a_min": self.a_min, "C": self.C, "D": self.D,
+                "x0": self.x0, "coefficients": self.coefficients.tolist(),
+                "theta5_toe_off": self.theta5_toe_off, "theta6_toe_off": self.theta6_toe_off,
+                "theta5_t1": self.theta5_t1}
+
+
+def node_at(t_nodes: np.ndarray, time: float) -> int:
+    """The grid node nearest ``time`` (the subphase grids put a node on every breakpoint)."""
+    return int(np.argmin(np.abs(t_nodes - time)))
+
+
+def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.ndarray,
+                            hind: StanceFoot) -> DoubleSupport:
+    """The previous stance's virtual leg goes on through this step's double support in the same
+    foot periods, to toe-off, where swing1 starts from it (kinematics.virtual_leg)."""
+    t_to = plan.timings.t_ds
+    k_to = node_at(stance.t, t_to)
+    hip_to, hip_vel_to = hips[k_to], hip_vels[k_to]
+    t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
+    pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
+    pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, math.radians(attrs.toe_off_foot_pitch), plan.constraints.theta3)
+    hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds)
+    ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
+    # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
+    # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached
+    # full stretch, where its inverse kinematics is singular), and an infinitesimal difference
+    # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
+    window = TOE_OFF_RATE_WINDOW * t_to
+    # the double support's nodes, then toe-off and the window's start, in one pass
+    m = len(ds_nodes)
+    legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window)],
+                       np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to]))
+    return DoubleSupport(t=stance.t[ds_nodes], theta3=np.array(legs.theta3[:m]), theta4=np.array(legs.theta4[:m]),
+                         pitch=np.array(legs.pitch[:m]), theta3_toe_off=float(legs.theta3[m]),
+                         theta4_toe_off=float(legs.theta4[m]),
+                         theta3d_toe_off=float(legs.theta3[m] - legs.theta3[m + 1]) / window,
+                         ankle_toe_off=legs.ankle[m], theta5_toe_off=float(legs.theta5[m]),
+                         theta6_toe_off=float(legs.theta6[m]), hind_foot=hind,
+                         samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]))
+
+
+def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray) -> CurveP:
+    """Curve P from the toe-off ankle to the ankle with the toe under the knee at t1, the thigh at
+    its heel-strike angle θ3 (eq. 3); the foot reaches its heel-strike angles by t1, dorsiflexing
+    further if the toe needs it."""
+    b, a, t, con = body, attrs, plan.timings, plan.constraints
+    t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
+    theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
+    knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
+    ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs,
+                                                a.toe_clearance + TOE_MARGIN_AT_T1_REL * b.l1)
+    a0, x0 = ds.ankle_toe_off[1], ds.ankle_toe_off[0]
+    a_min = ankle_t1[1]
+    d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
+    a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
+                max(a0, a_min) + CURVE_P_PEAK_MARGIN_REL * b.l1)
+    peak = a.swing_peak_position * d_travel
+    coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel)
+    swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
+                           theta5_hs, theta6_hs)
+    return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs,
+                  theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
+                  swing_foot=swing_foot)
+
+
+def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_parameters: dict,
+                  origin: np.ndarray, curve: CurveP) -> np.ndarray:
+    """The swing models' context vector (:data:`klaw_ocp.control.swing_law.SWING_CONTEXT`): they
+    re-simulate the stance (its context and solved parameters) and read curve P, the foot's
+    schedule, the holding gains and the subphase times from it."""
+    b, a, t, con = body, attrs, plan.timings, plan.constraints
+    t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
+    ctx = dict(stance_context)
+    ctx.update({f"stance_{k}": stance_parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
+    ctx.update(origin_x=origin[0], origin_y=origin[1],
+               l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
+               **{key: getattr(curve.swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)},
+               k_h=gains.k_h, d_h=gains.d_h, theta3_target=con.theta3,
+               tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
+               swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
+               **{f"P{i}": curve.coefficients[i] for i in range(5)})
+    return SWING_CONTEXT.pack(ctx)
