@@ -18,7 +18,7 @@ def test_run_writes_summary_and_dynamics(short_config, tmp_path, capsys):
     assert main(["run", str(short_config), "--out", str(out), "--quiet", "--method", "plain-shooting"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "ok" and summary["method"] == "plain-shooting"
-    assert summary["body"]["height"] == 1.8 and summary["wall_s"] > 0
+    assert summary["body"]["height"] == 1.8 and summary["wall_s"] > 0 and summary["compile_s"] >= 0
     assert len(summary["steps"]) == 2
     for step in summary["steps"]:
         assert PLAN_KEYS <= set(step)
@@ -37,7 +37,9 @@ def test_run_failure_writes_completed_steps(short_config, tmp_path, capsys, fail
     fail_at_step(1, "swing2", 0.031)
     out = tmp_path / "out"
     assert main(["run", str(short_config), "--out", str(out), "--quiet"]) == 3
-    err = capsys.readouterr().err.strip().splitlines()
+    # (the session's first walk may also say that it compiles the solver kernels, tests/test_first_run.py)
+    err = [line for line in capsys.readouterr().err.strip().splitlines()
+           if not line.startswith("klaw-ocp: compiling the solver kernels")]
     assert len(err) == 1 and "step 1" in err[0] and "swing2" in err[0] and "0.031" in err[0]
     assert "forced for the test" in err[0] and f"written to {out}" in err[0]
     assert "Traceback" not in err[0]

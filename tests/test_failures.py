@@ -42,6 +42,16 @@ def _config(tmp_path, name="walk", **sections):
     return path
 
 
+#: the line a run prints before it compiles the solver kernels, the first time in a fresh
+#: kernel cache (each test session has one: tests/conftest.py; tests/test_first_run.py)
+COMPILING = "klaw-ocp: compiling the solver kernels"
+
+
+def _lines(stderr: str) -> list:
+    """The lines of ``stderr`` without the compile notice."""
+    return [line for line in stderr.strip().splitlines() if not line.startswith(COMPILING)]
+
+
 def _env():
     return {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]),
             "PYTHONWARNINGS": "ignore"}
@@ -144,7 +154,7 @@ def test_a_real_solver_failure_exits_3_with_one_line_and_nothing_else(method, st
                        capture_output=True, text=True, env=_env(), timeout=600)
     assert r.returncode == 3, r.stderr
     assert r.stdout == ""
-    lines = r.stderr.strip().splitlines()
+    lines = _lines(r.stderr)
     assert len(lines) == 1, r.stderr
     assert lines[0].startswith("klaw-ocp: error: step 0, subphase 'stance': did not converge (residual ")
     assert cause in lines[0] and f"written to {out}" in lines[0]
@@ -159,9 +169,7 @@ def test_a_forced_failure_keeps_every_completed_step(tmp_path, capsys, fail_at_s
     fail_at_step(2, "swing3", 0.07)
     out = tmp_path / "o"
     assert main(["run", str(config), "--out", str(out), "--quiet", "--no-animation"]) == 3
-    # (the session's first walk may also say that it compiles the solver kernels, tests/test_first_run.py)
-    err = [line for line in capsys.readouterr().err.strip().splitlines()
-           if not line.startswith("klaw-ocp: compiling the solver kernels")]
+    err = _lines(capsys.readouterr().err)
     assert len(err) == 1 and "step 2" in err[0] and "'swing3'" in err[0] and "0.07" in err[0]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["steps_completed"] == 2
@@ -222,7 +230,7 @@ def test_ctrl_c_exits_130_and_keeps_every_completed_step(tmp_path):
         if process.poll() is None:
             process.kill()
     assert process.returncode == 130, stderr
-    lines = stderr.strip().splitlines()
+    lines = _lines(stderr)
     assert len(lines) == 1 and lines[0].startswith("klaw-ocp: interrupted (Ctrl-C); "), stderr
     assert f"kept in {partial}" in lines[0] and "Traceback" not in stderr and stdout == ""
     assert (out / "summary.json").read_bytes() == earlier and sorted(p.name for p in out.iterdir()) == ["summary.json"]

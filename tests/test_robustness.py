@@ -81,7 +81,8 @@ def test_the_summary_says_which_subphase_needed_which_fallback(method, fallback,
     ``build_s`` (docs/solvers.md) is the one-off build time spent in a subphase's solve call and
     kept out of its ``wall_s``: multiple shooting's IPOPT repair builds (or fetches) its NLP there,
     here made to take at least BUILD_DELAY_S. Build and solve times are disjoint parts of the
-    walk's wall time, so neither is negative and their sum over the subphases fits in it."""
+    walk's wall and compile times, so neither is negative and their sum over the subphases fits
+    in them."""
     if method == "multiple-shooting":
         import klaw_ocp.solvers.multiple_shooting as ms
         original = ms.ipopt_solver
@@ -102,7 +103,9 @@ def test_the_summary_says_which_subphase_needed_which_fallback(method, fallback,
         assert isinstance(entry["build_s"], float) and math.isfinite(entry["build_s"])
         assert entry["build_s"] == solution.build_s                 # the summary reports the solver's value
         assert entry["build_s"] >= 0 and entry["wall_s"] >= 0, entry["name"]
-    assert sum(s["build_s"] + s["wall_s"] for s in entries) <= summary["wall_s"] + 1e-6
+    # a library compiled on its first use (IPOPT's, in a fresh kernel cache) is in its
+    # subphase's build_s and in the walk's compile_s, which the walk's wall_s leaves out
+    assert sum(s["build_s"] + s["wall_s"] for s in entries) <= summary["wall_s"] + summary["compile_s"] + 1e-6
     if method == "multiple-shooting":
         ipopt = [s for s in entries if s["nlp"] == "ipopt"]
         assert ipopt and all(s["build_s"] >= BUILD_DELAY_S for s in ipopt)

@@ -1,5 +1,6 @@
-"""What a walk does with the terminal: Ctrl-C waits for the end of the step, and CasADi's own
-warnings are kept for summary.json instead of being printed (issue #24).
+"""What a walk does with the terminal: Ctrl-C waits for the end of the step, CasADi's own
+warnings are kept for summary.json instead of being printed (issue #24), and the one pause a
+first run makes, compiling the solver kernels, is announced before it starts (issue #32).
 
 - :class:`DeferredInterrupt`: CasADi checks for Ctrl-C inside IPOPT and turns a KeyboardInterrupt
   into a failed solve ("NonIpopt_Exception_Thrown", with a warning on stderr), so an interrupt
@@ -11,10 +12,14 @@ warnings are kept for summary.json instead of being printed (issue #24).
 - :class:`CasadiMessages`: CasADi writes its warnings through Python's ``sys.stderr``
   (``CasADi - <date> <time> WARNING("...") [file:line]``); while a walk runs, those lines are
   taken out of the stream and kept (without the date, once each); every other line goes through.
+- :class:`CompileNotice`: a listener for :func:`klaw_ocp.solvers.kernels.compile_notices` that
+  says, on one line on stderr, that the kernels are being compiled once for this machine, how
+  long that takes and where they are kept, once, before the pause.
 """
 from __future__ import annotations
 
 import io
+import os
 import re
 import signal
 import sys
@@ -24,6 +29,10 @@ _PREFIX = "CasADi - "
 _STAMP = re.compile(r"^CasADi - \S+ \S+ ")
 #: at most this many distinct CasADi messages are kept per walk
 MAX_MESSAGES = 50
+#: how long the first walk on a machine compiles: the natural walk's four libraries took 2.4-2.7 s
+#: on a quiet 2-core machine, up to 12 s while other work loaded it, a walk that ends at rest or a
+#: tracking stance a few seconds more (docs/performance.md)
+COMPILE_ESTIMATE = "typically 3-10 s"
 
 
 class DeferredInterrupt:
@@ -109,3 +118,30 @@ class CasadiMessages(io.TextIOBase):
 
     def isatty(self) -> bool:
         return self._target.isatty()
+
+
+class CompileNotice:
+    """Called with the cache folder when the solver kernels start compiling: writes one line on
+    stderr the first time, through ``tqdm.write`` so that a progress bar on the same stream is
+    cleared and redrawn around it rather than run into (a library compiled mid-walk, such as
+    IPOPT's, comes while the bar is shown). :attr:`told` says whether it spoke."""
+
+    def __init__(self, prog: str):
+        self.prog, self.told = prog, False
+        self._lock = threading.Lock()
+
+    def line(self, folder) -> str:
+        home = os.path.expanduser("~")
+        where = str(folder)
+        if home not in ("", "~", os.sep) and where.startswith(home + os.sep):
+            where = "~" + where[len(home):]
+        return (f"{self.prog}: compiling the solver kernels for this machine, once "
+                f"({COMPILE_ESTIMATE}; cached in {where})")
+
+    def __call__(self, folder) -> None:
+        with self._lock:                  # the compiles of a walk start in parallel threads
+            if self.told:
+                return
+            self.told = True
+        from tqdm import tqdm
+        tqdm.write(self.line(folder), file=sys.stderr)

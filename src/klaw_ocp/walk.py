@@ -31,6 +31,7 @@ from .dynamics import heel_strike_map, stance_hip
 from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, hind_foot_at_rest
 from .solvers import make_solver
+from .solvers.kernels import compile_seconds
 
 
 @dataclass
@@ -59,7 +60,12 @@ class Walk:
     steps: list = field(default_factory=list)
     status: str = "ok"
     message: str = ""
+    #: the walk's own wall time: compiling the solver kernels (``compile_s``) is left out, as the
+    #: time in ``on_step`` is, so that ``duration / wall_s`` is the walk's real-time factor
     wall_s: float = 0.0
+    #: seconds spent compiling the solver kernels during the walk: the first walk on a machine
+    #: (or after an upgrade) compiles them once (solvers/kernels.py); 0.0 when they were cached
+    compile_s: float = 0.0
     initial_state: np.ndarray | None = None
     #: why a failed walk stopped (:meth:`klaw_ocp.errors.ConvergenceError.as_dict`), else None
     failure: dict | None = None
@@ -143,35 +149,46 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
 
     ``on_step(walk)``, if given, is called after each step is complete (``walk.steps[-1]`` the
     step just solved, ``walk.wall_s`` the simulation time so far): ``klaw-ocp run`` writes the
-    step's rows there. The time spent in it is not counted in ``wall_s``.
+    step's rows there. The time spent in it is not counted in ``wall_s``, nor is the time spent
+    compiling the solver kernels, which is ``walk.compile_s``
+    (:func:`klaw_ocp.solvers.kernels.compile_notices` tells when compiling starts).
+
+    With ``progress``, a tqdm bar on stderr advances as each step completes.
 
     Every argument is checked before anything is built or solved: a bad one raises
     :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what is allowed;
     :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk outside the
     supported envelope)."""
     spec = _checked_spec(spec, method, progress, raise_on_failure)
-    wall0 = time.perf_counter()
+    wall0, compile0 = time.perf_counter(), compile_seconds()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)
     gains = control_gains(spec.body, spec.attributes)
     controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule, spec.stance)
     walk = Walk(spec)
     outside = 0.0       # seconds spent in on_step, kept out of wall_s
-    iterator = range(len(spec.plans))
+
+    def timed() -> None:
+        walk.compile_s = compile_seconds() - compile0
+        walk.wall_s = time.perf_counter() - wall0 - outside - walk.compile_s
+
     bar = None
-    if progress:
-        from tqdm import tqdm
-        iterator = bar = tqdm(iterator, desc=f"{spec.name} ({spec.method})", unit="step")
     interrupts, messages = DeferredInterrupt(), CasadiMessages()
     try:
         with interrupts, messages:
+            plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
+            if progress:
+                # a bar advanced by hand as steps complete (iterating a list of the steps would
+                # fill it before the first solve); made inside ``messages`` so that a line written
+                # with tqdm.write (the compile notice) clears and redraws it
+                from tqdm import tqdm
+                bar = tqdm(total=len(plans), desc=f"{spec.name} ({spec.method})", unit="step")
             inp = _first_input(controller, spec)
             walk.initial_state = inp.x0.copy()
-            plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
             # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
             # the next step's hind leg, whose toe-off starts that step's swing1
             inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest)
-            for k in iterator if not spec.end_at_rest else list(iterator) + [len(spec.plans)]:
+            for k in range(len(plans)):
                 interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
                 plan = plans[k]
                 result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
@@ -185,9 +202,11 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
                     walk.steps[-1].complete_stance_leg(result)
                 walk.steps.append(result)
                 inp = next_inp
+                if bar is not None:
+                    bar.update(1)
                 if on_step is not None:
                     t0 = time.perf_counter()
-                    walk.wall_s = t0 - wall0 - outside
+                    timed()
                     on_step(walk)
                     outside += time.perf_counter() - t0
             interrupts.check()
@@ -205,7 +224,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
         raise Interrupted(walk) from err
     finally:
         # however the walk ends (complete, failed, interrupted): before the caller sees it
-        walk.wall_s = time.perf_counter() - wall0 - outside
+        timed()
         walk.solver_messages = list(messages.messages)
         if bar is not None:
             bar.close()      # the bar's line ends before any message that follows

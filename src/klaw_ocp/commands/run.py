@@ -97,18 +97,26 @@ def handle_run(args: argparse.Namespace) -> int:
     plots = f"; {n_plots} plots in {times['plots']:.2f} s" if times["plots"] is not None else ""
     if times["animation"] is not None:
         plots += f"; {GIF_FILE} in {times['animation']:.2f} s"
+    # the real-time factor is the walk's; a first run's one-off compile is said beside it
+    compiled = (f", plus {walk.compile_s:.1f} s compiling the solver kernels once for this machine"
+                if walk.compile_s > 0 else "")
     print(f"{walk.spec.name}: {len(walk.steps)} steps, {walk.duration:.2f} s of walking in {walk.wall_s:.2f} s "
-          f"({rtf:.1f}x real time, {walk.spec.method}, {walk.spec.stance} stance){plots}; wrote {out}/")
+          f"({rtf:.1f}x real time, {walk.spec.method}, {walk.spec.stance} stance){compiled}{plots}; wrote {out}/")
     return EXIT_OK
 
 
 def walk_into(writer, spec, quiet: bool = True):
     """Walk ``spec`` with ``writer`` writing each step as it completes; returns (walk, outcome,
-    failure): outcome "ok", "failed" (failure: the ConvergenceError) or "interrupted"."""
+    failure): outcome "ok", "failed" (failure: the ConvergenceError) or "interrupted". If the
+    solver kernels have to be compiled (the first run on a machine), one line on stderr says so
+    before the pause, even with ``quiet``: it is the one pause a user cannot otherwise explain."""
+    from ..console import CompileNotice
     from ..errors import ConvergenceError
+    from ..solvers.kernels import compile_notices
     from ..walk import Walk, simulate_walk
     try:
-        return simulate_walk(spec, progress=not quiet, on_step=writer.step), "ok", None
+        with compile_notices(CompileNotice(PROG)):
+            return simulate_walk(spec, progress=not quiet, on_step=writer.step), "ok", None
     except ConvergenceError as exc:
         return exc.partial, "failed", exc
     except KeyboardInterrupt as exc:      # klaw_ocp.errors.Interrupted, or Ctrl-C before the first step

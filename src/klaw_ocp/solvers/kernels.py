@@ -22,6 +22,10 @@ The cache folder is ``$KLAW_OCP_CACHE_DIR``, else ``$XDG_CACHE_HOME/klaw_ocp``, 
 each compiles into its own temporary file and renames it into place, which is atomic, so a
 reader sees either no library or a whole one. A library that does not load is rebuilt.
 
+Compiling takes seconds where everything else takes milliseconds, so it is announced and timed:
+:func:`compile_notices` tells a listener (the command line) before compiling starts, and
+:func:`compile_seconds` is the wall time spent compiling (a walk's ``compile_s``).
+
 Arrays cross this boundary flat, in CasADi's column-major order: an (nx, N) matrix is a numpy
 array of shape (N, nx) in C order. A kernel's work arrays are its own, so one kernel object must
 not be called from two threads at once (parallel sweeps use processes).
@@ -37,7 +41,9 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
@@ -53,6 +59,57 @@ _DISABLED = ("0", "off", "false", "no")
 #: layer is not thread-safe); compilers run in parallel (:func:`prefetch`)
 _casadi_lock = threading.RLock()
 _compiler_state: dict = {}
+#: who is told that compiling starts (:func:`compile_notices`), and the compile clock: how many
+#: libraries compile right now, since when, and the seconds of the finished bursts
+_listeners: list = []
+_clock = {"active": 0, "since": 0.0, "total": 0.0}
+_clock_lock = threading.Lock()
+
+
+@contextmanager
+def compile_notices(listener: Callable[[Path], None]):
+    """Within the block, ``listener(folder)`` is called (from the compiling thread) each time a
+    library starts compiling while no other one is: before the pause, so that whoever runs the
+    solvers can say why they pause. ``folder`` is the cache the library goes into. The solvers
+    know nothing of who listens (the command line prints one line, docs/performance.md)."""
+    with _clock_lock:
+        _listeners.append(listener)
+    try:
+        yield
+    finally:
+        with _clock_lock:
+            _listeners.remove(listener)
+
+
+def compile_seconds() -> float:
+    """Wall time this process has spent compiling kernels (building their CasADi Functions,
+    generating C and running the compiler), finished compiles only. Libraries compiled at once
+    (:func:`prefetch`) count once: this is time the caller waited, not CPU time."""
+    with _clock_lock:
+        return _clock["total"]
+
+
+@contextmanager
+def _compiling(folder: Path):
+    """Time one library's compile on the clock, telling the listeners when a burst starts."""
+    with _clock_lock:
+        starts = _clock["active"] == 0
+        _clock["active"] += 1
+        listeners = list(_listeners) if starts else []
+        if starts:
+            _clock["since"] = time.perf_counter()
+    try:
+        for listener in listeners:
+            try:
+                listener(folder)
+            except Exception:  # noqa: BLE001 - a notice that cannot be given (stderr closed)
+                pass           # must not turn the compile into the slow CasADi fallback
+        yield
+    finally:
+        with _clock_lock:
+            _clock["active"] -= 1
+            if _clock["active"] == 0:
+                _clock["total"] += time.perf_counter() - _clock["since"]
 
 
 def source_key(*modules) -> str:
@@ -205,6 +262,13 @@ class KernelLibrary:
         digest.update(" ".join([_compiler_identity(cc), *FLAGS]).encode())
         return cache_dir() / f"{digest.hexdigest()[:32]}.so"
 
+    def will_compile(self) -> bool:
+        """Whether :meth:`load` would compile (a compiler, and no library in the cache yet)."""
+        if hasattr(self, "_lib"):
+            return False
+        path = self.library_path()
+        return path is not None and not path.exists()
+
     def _load(self) -> Optional[ctypes.CDLL]:
         path = self.library_path()
         if path is None:
@@ -218,8 +282,9 @@ class KernelLibrary:
             except OSError:
                 pass   # a library from another machine sharing the folder, or damaged: rebuild
         try:
-            folder.mkdir(parents=True, exist_ok=True)
-            self._compile(cc, folder, path)
+            with _compiling(folder):
+                folder.mkdir(parents=True, exist_ok=True)
+                self._compile(cc, folder, path)
             lib = ctypes.CDLL(str(path))
         except (OSError, subprocess.SubprocessError, RuntimeError) as err:
             self._functions = None   # built for compiling; CasADi evaluates another form faster
