@@ -32,6 +32,7 @@ from typing import Any, Literal, Optional
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from . import choices
 from .body import Body
 from .errors import ConfigError, GaitLimitError, KlawError, field_path, short_repr
 from .gait import LocomotionAttributes, StepPlan, plan_steps
@@ -53,10 +54,7 @@ _QUOTED = 60
 #: Shared pydantic settings: unknown keys are errors, no silent "5" -> 5.0, no NaN or infinity.
 _STRICT = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
 
-SOLVER_METHODS = ("multiple-shooting", "plain-shooting")
-NLP_CHOICES = ("auto", "rootfinder", "ipopt")
-STANCES = ("monitored", "tracking")
-LOCK_RULES = ("momentum", "zero")
+SOLVER_METHODS, NLP_CHOICES, STANCES, LOCK_RULES = choices.METHODS, choices.NLPS, choices.STANCES, choices.LOCK_RULES
 
 # What the solvers can use (measured, docs/limits.md):
 #: every subphase grid has a node on each of a step's 4 breakpoints (F_θ1 off, toe-off, the ends
@@ -134,18 +132,15 @@ class SolverConfig(BaseModel):
     """How the subphase boundary-value problems are solved (section 4.1)."""
 
     model_config = _STRICT
-    method: Literal["multiple-shooting", "plain-shooting"] = "multiple-shooting"
-    intervals: int = Field(default=20, ge=INTERVALS_RANGE[0], le=INTERVALS_RANGE[1])
-    tolerance: float = Field(default=1e-9, ge=TOLERANCE_RANGE[0], le=TOLERANCE_RANGE[1])
-    max_iterations: int = Field(default=50, ge=ITERATIONS_RANGE[0], le=ITERATIONS_RANGE[1])
-    nlp: Literal["auto", "rootfinder", "ipopt"] = "auto"
-    #: "monitored": the paper's stance (pa follows the hip sinusoid by feedback; square problem);
-    #: "tracking": pa free over the grid, IPOPT tracks the sinusoid under the hip floor (multiple shooting)
-    stance: Literal["monitored", "tracking"] = "monitored"
-    #: what a lock does to the other rates (the stance leg reaching l1, §4.2; the knee at full
-    #: extension, eq. 5; dynamics.LOCK_RULES): "momentum" conserves every other generalized
-    #: momentum, "zero" (the paper's reading) sets only the locked rate to zero
-    lock_rule: Literal["momentum", "zero"] = "momentum"
+    method: Literal[choices.METHODS] = choices.DEFAULT_METHOD
+    intervals: int = Field(default=choices.DEFAULT_INTERVALS, ge=INTERVALS_RANGE[0], le=INTERVALS_RANGE[1])
+    tolerance: float = Field(default=choices.DEFAULT_TOLERANCE, ge=TOLERANCE_RANGE[0], le=TOLERANCE_RANGE[1])
+    max_iterations: int = Field(default=choices.DEFAULT_MAX_ITERATIONS, ge=ITERATIONS_RANGE[0],
+                                le=ITERATIONS_RANGE[1])
+    #: klaw_ocp.choices says what each of these means
+    nlp: Literal[choices.NLPS] = choices.DEFAULT_NLP
+    stance: Literal[choices.STANCES] = choices.DEFAULT_STANCE
+    lock_rule: Literal[choices.LOCK_RULES] = choices.DEFAULT_LOCK_RULE
 
 
 #: Frames per second of angles.csv (the body's motion, docs/body.md) unless ``output.fps`` says
@@ -155,10 +150,6 @@ MAX_FPS = 1000.0
 #: The most frames angles.csv may hold (output.fps x the walk's seconds): 60 s at 1000 fps, the
 #: longest walk at 100 fps; the body's frames cost about 3 KB of memory each (docs/limits.md)
 MAX_FRAMES = 60_000
-#: The longest walk whose plots are drawn (steps): legs.png strobes every step, about 1 MB of
-#: memory a step (a 1000-step walk's plots take 1.5 GB); longer walks run with --no-plots or
-#: output.plots: false (docs/limits.md)
-MAX_PLOTTED_STEPS = 200
 #: The longest output.dir accepted (characters)
 MAX_DIR_CHARS = 1024
 
@@ -273,9 +264,10 @@ def check_walk_size(n_steps: int, intervals: int) -> None:
 
 def check_stance_method(stance: str, method: str, prefix: str = "") -> None:
     """The tracking stance is an optimal control problem: refuse it with plain shooting (one line)."""
-    if stance == "tracking" and method != "multiple-shooting":
-        raise ConfigError(f"{prefix}solver.stance: got 'tracking' with method {method!r}, allowed 'monitored' "
-                          "(the tracking stance is an optimal control problem; use method multiple-shooting)")
+    if stance == choices.TRACKING and method != choices.MULTIPLE_SHOOTING:
+        raise ConfigError(f"{prefix}solver.stance: got {choices.TRACKING!r} with method {method!r}, allowed "
+                          f"{choices.MONITORED!r} (the tracking stance is an optimal control problem; use "
+                          f"method {choices.MULTIPLE_SHOOTING})")
 
 
 def load_config(path, sets=()) -> ExperimentConfig:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import choices
 from .compare import SUBPHASES
 from .errors import ConfigError, ConvergenceError, out_of_range
 
@@ -52,7 +53,7 @@ def check_configs(configs_dir) -> dict[str, Path]:
     return paths
 
 
-def _walk(path: Path, method: str = "multiple-shooting", progress: bool = False):
+def _walk(path: Path, method: str = choices.MULTIPLE_SHOOTING, progress: bool = False):
     """One walk and its CPU and wall time; a walk that does not converge stops the reproduction
     (its message names step, subphase and residual)."""
     from .io import RunData
@@ -70,7 +71,7 @@ def _walk(path: Path, method: str = "multiple-shooting", progress: bool = False)
 def solve_all(paths: dict[str, Path], progress: bool = False) -> dict:
     """Every walk of the reproduction: key -> RunData; the natural walk in both modes."""
     runs = {key: _walk(path, progress=progress) for key, path in paths.items()}
-    runs["natural_ps"] = _walk(paths["natural"], "plain-shooting", progress)
+    runs["natural_ps"] = _walk(paths["natural"], choices.PLAIN_SHOOTING, progress)
     return runs
 
 
@@ -113,7 +114,7 @@ def numbers(runs: dict) -> dict:
                    "t_theta1_off_s")
     excursions = {key: hip_excursions(runs[key]) for key in ("natural", "short", "long", "fig8_2kmh", "fig8_5kmh")}
     modes = {}
-    for key, method in (("natural", "multiple-shooting"), ("natural_ps", "plain-shooting")):
+    for key, method in (("natural", choices.MULTIPLE_SHOOTING), ("natural_ps", choices.PLAIN_SHOOTING)):
         run = runs[key]
         modes[method] = {"cpu_s": run.extra["cpu_s"], "wall_s": run.extra["wall_s"],
                          "solve_s": run.summary["wall_s"], "simulated_s": run.summary["simulated_s"],
@@ -228,11 +229,11 @@ def readme(n: dict, comparison_text: str) -> str:
     ]
     for name in SUBPHASES:
         cells = []
-        for method in ("multiple-shooting", "plain-shooting"):
+        for method in (choices.MULTIPLE_SHOOTING, choices.PLAIN_SHOOTING):
             it = modes[method]["iterations"].get(name)
             cells.append(f"{it['min']} / {it['median']:g} / {it['max']}" if it else "–")
         lines.append(f"| {name} | {cells[0]} | {cells[1]} |")
-    ms, ps = modes["multiple-shooting"], modes["plain-shooting"]
+    ms, ps = modes[choices.MULTIPLE_SHOOTING], modes[choices.PLAIN_SHOOTING]
     lines += [
         "",
         "Multiple shooting's iterations are Newton steps on the whole subphase; plain shooting's count "

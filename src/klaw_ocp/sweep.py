@@ -30,11 +30,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+from . import choices
 from .errors import ConfigError, ConvergenceError, Interrupted, KlawError, finite_real, one_line, out_of_range
 from .config_paths import (_PATH, _VARY_ALLOWED, MAX_WALKS, RANGE_DIGITS, RANGE_REL_TOL,  # noqa: F401
                            combination_label, format_value, parse_values, parse_vary, set_path)
 
-METHODS = ("multiple-shooting", "plain-shooting")
+METHODS = choices.METHODS
 FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 #: The columns of a row after the varied paths, in CSV order.
 RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
@@ -67,9 +68,9 @@ def _check_vary(vary: dict) -> dict[str, list]:
 
 
 def _methods(methods) -> tuple | None:
-    chosen = METHODS if methods == "both" else ((methods,) if isinstance(methods, str) else methods)
+    chosen = METHODS if methods == choices.ALL_METHODS else ((methods,) if isinstance(methods, str) else methods)
     if chosen is not None and (not chosen or any(m not in METHODS for m in chosen)):
-        raise ConfigError(out_of_range("--method", methods, f"one of {', '.join(METHODS)}, both"))
+        raise ConfigError(out_of_range("--method", methods, f"one of {', '.join(METHODS)}, {choices.ALL_METHODS}"))
     return None if chosen is None else tuple(chosen)
 
 
@@ -249,6 +250,8 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
             for i, task in enumerate(tasks):
                 done(i, run_walk(task["mapping"], task["method"]))
         else:
+            if scheduler is None:
+                _compile_here_first(tasks)
             executor, client = _executor(workers, len(tasks), scheduler)
             try:
                 _run_on(executor, tasks, done)
@@ -261,6 +264,27 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     finally:
         bar.close()
     return finished()
+
+
+#: The most solver settings whose kernels a sweep compiles before its workers start.
+MAX_PRECOMPILED = 4
+
+
+def _compile_here_first(tasks: list[dict]) -> None:
+    """Compile the kernels the walks need in this process before local workers start (each worker
+    would otherwise compile the same ones at once, on a machine's first sweep), so that a caller
+    listening with :func:`klaw_ocp.solvers.kernels.compile_notices` hears of it; a cached kernel
+    only loads. Settings beyond MAX_PRECOMPILED compile in their workers as before."""
+    from .control.step import prepare_kernels
+    from .solvers import make_solver
+    seen = []
+    for task in tasks:
+        solver = task["mapping"].get("solver") or {}
+        key = (task["method"], solver.get("intervals", choices.DEFAULT_INTERVALS),
+               solver.get("lock_rule", choices.DEFAULT_LOCK_RULE))
+        if key not in seen and len(seen) < MAX_PRECOMPILED:
+            seen.append(key)
+            prepare_kernels(make_solver(key[0], intervals=key[1]), key[2])
 
 
 def _run_on(executor, tasks: list[dict], done) -> None:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from . import choices
 from .body import Body
 from .console import CasadiMessages, DeferredInterrupt
 from .control.gains import control_gains
@@ -41,15 +42,15 @@ class WalkSpec:
     body: Body
     attributes: object
     plans: list
-    method: str = "multiple-shooting"
-    intervals: int = 20
-    tolerance: float = 1e-10
-    max_iterations: int = 50
-    nlp: str = "auto"
+    method: str = choices.DEFAULT_METHOD
+    intervals: int = choices.DEFAULT_INTERVALS
+    tolerance: float = choices.DEFAULT_TOLERANCE
+    max_iterations: int = choices.DEFAULT_MAX_ITERATIONS
+    nlp: str = choices.DEFAULT_NLP
     start_from_rest: bool = False
     end_at_rest: bool = False
-    lock_rule: str = "momentum"
-    stance: str = "monitored"
+    lock_rule: str = choices.DEFAULT_LOCK_RULE
+    stance: str = choices.DEFAULT_STANCE
 
 
 @dataclass

@@ -11,14 +11,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .. import choices
 from ..errors import ConfigError, out_of_range
 from . import EXIT_OK
 from ._common import add_set_option, check_output_dir, load, resolved_header
 from .run import add_force_option, keeping, report_unfinished
 
 HELP = "compare runs: solver modes, stance formulations, configs or finished results folders"
-METHODS = ("multiple-shooting", "plain-shooting")
-STANCES = ("monitored", "tracking")
+METHODS = choices.METHODS
+STANCES = choices.STANCES
 RUNS_DIR = "runs"
 
 
@@ -38,7 +39,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                 "  klaw-ocp compare results/natural_walk results/natural_walk-ps")
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="a config file or a results folder")
     p.add_argument("--method", metavar="M[,M...]",
-                   help="solver modes for the config inputs: multiple-shooting, plain-shooting or both "
+                   help=f"solver modes for the config inputs: {', '.join(choices.METHODS)} or {choices.ALL_METHODS} "
                         "(default: both for a single config, else each config's solver.method)")
     p.add_argument("--stance", metavar="S[,S...]",
                    help="stance formulations for the config inputs: monitored, tracking (default: "
@@ -53,10 +54,10 @@ def _choices(text: str | None, flag: str, allowed: tuple, both: bool = False) ->
     if text is None:
         return None
     items = [t.strip() for t in text.split(",")]
-    if both and items == ["both"]:
+    if both and items == [choices.ALL_METHODS]:
         return list(allowed)
     if not items or any(t not in allowed for t in items) or len(set(items)) != len(items):
-        extra = ", or both" if both else ""
+        extra = f", or {choices.ALL_METHODS}" if both else ""
         raise ConfigError(out_of_range(flag, text, f"a comma list of distinct {', '.join(allowed)}{extra}"))
     return items
 

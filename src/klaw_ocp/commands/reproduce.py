@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from . import EXIT_OK
+from . import EXIT_OK, PROG
 from .run import add_force_option, keeping, report_unfinished
 
 HELP = "regenerate results/paper/: the paper's figures 8 and 10 and its numbers beside ours"
@@ -35,7 +35,9 @@ def handle(args: argparse.Namespace) -> int:
     check_configs(args.configs)                                   # before any walk
     staged = StagedFolder(out, "reproduce", force=args.force)    # refused here, before any walk
     staging = staged.open()
-    with keeping(staged, lambda: "what was drawn"):
+    from ..console import CompileNotice
+    from ..solvers.kernels import compile_notices
+    with keeping(staged, lambda: "what was drawn"), compile_notices(CompileNotice(PROG)):
         try:
             written = reproduce(args.configs, staging, progress=not args.quiet)
         except ConvergenceError as exc:

@@ -24,6 +24,7 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
+from .. import choices
 from ..errors import one_line
 from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
 from ._common import add_set_option, check_output_dir, check_plots, load, resolved_header
@@ -49,9 +50,9 @@ def configure_run(p: argparse.ArgumentParser) -> None:
                 "--method plain-shooting --out /tmp/slow")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
     p.add_argument("--out", metavar="DIR", help="output folder (default: output.dir or results/<name>/)")
-    p.add_argument("--method", choices=("multiple-shooting", "plain-shooting"),
+    p.add_argument("--method", choices=choices.METHODS,
                    help="solver mode (default: the config's solver.method)")
-    p.add_argument("--stance", choices=("monitored", "tracking"),
+    p.add_argument("--stance", choices=choices.STANCES,
                    help="stance formulation: the paper's monitored pa, or pa optimised over the grid "
                         "to track the hip sinusoid (multiple shooting only; default: solver.stance)")
     p.add_argument("--fps", metavar="FPS",

@@ -6,6 +6,7 @@ import os
 import sys
 from pathlib import Path
 
+from .. import choices
 from ..errors import ConfigError
 from . import EXIT_OK, EXIT_SOLVER_FAILED, PROG
 from .run import add_force_option, keeping, report_unfinished
@@ -27,7 +28,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                         "solver.intervals, ...) and its values: a comma list of YAML scalars "
                         "(1,3,5 or true,false) or a range start:stop:step that includes stop when "
                         "it is on the grid (0.5:8:0.5); repeat for a grid")
-    p.add_argument("--method", choices=("multiple-shooting", "plain-shooting", "both"),
+    p.add_argument("--method", choices=(*choices.METHODS, choices.ALL_METHODS),
                    help="solver mode(s) (default: each combination's solver.method)")
     p.add_argument("--workers", type=int, metavar="N",
                    help="local worker processes (default: the number of CPUs; 1 runs in this process)")
@@ -67,7 +68,9 @@ def handle(args: argparse.Namespace) -> int:
         # no finished walk is lost
         append_sweep_row(staging() / "sweep.csv", row, list(vary))
 
-    with keeping(staged, lambda: "the walks finished so far"):
+    from ..console import CompileNotice
+    from ..solvers.kernels import compile_notices
+    with keeping(staged, lambda: "the walks finished so far"), compile_notices(CompileNotice(PROG)):
         try:
             rows = run_sweep(args.config, vary, methods=args.method, workers=args.workers,
                              scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),

@@ -26,6 +26,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import choices
 from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
@@ -42,7 +43,7 @@ def _lock(rule: str):
     """The leg locks: wd -> 0 by the chosen lock rule (ERRATA "Velocities at a lock")."""
     def apply(x, c, mode):
         x = x.copy()
-        if rule == "zero":
+        if rule == choices.ZERO:
             x[3] = 0.0
         else:
             x[:6] = np.asarray(impact_functions()["stance_lock"](x[:6], c[:N_BODY_PARAMETERS])).ravel()
@@ -117,7 +118,7 @@ def stance_fixed(at_rest: bool = False) -> tuple:
 
 
 @lru_cache(maxsize=None)
-def stance_spec(lock_rule: str = "momentum", at_rest: bool = False) -> SubphaseSpec:
+def stance_spec(lock_rule: str = choices.DEFAULT_LOCK_RULE, at_rest: bool = False) -> SubphaseSpec:
     """The stance :class:`SubphaseSpec` (built once per lock rule).
 
     ``at_rest``: the closing stance of a walk that ends standing: a third unknown, the F_theta1

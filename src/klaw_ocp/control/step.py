@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import choices
 from ..body import DYNAMIC_PARAMETER_NAMES, Body
 from ..dynamics import knee_lock_map, stance_hips
 from ..dynamics.evaluate import evaluate
@@ -40,6 +41,12 @@ SWING3_SCALE_REL = 0.05
 #: Swing2's recovery (§4.3): where the toe would touch the ground, the thigh's holding target is
 #: moved by steps of this much (rad; negative: the thigh further forward, the hip torque larger).
 SWING2_RECOVERY_STEP = -0.005
+
+
+def prepare_kernels(solver, lock_rule: str = choices.DEFAULT_LOCK_RULE) -> None:
+    """Load, or compile, the kernels of the four subphases a walk with this solver and lock rule
+    solves: the first walk on a machine compiles them all at once, on every core."""
+    solver.prepare([stance_spec(lock_rule, False), *swing_specs(lock_rule).values()])
 
 
 def body_context(body: Body) -> dict:
@@ -124,7 +131,7 @@ def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> l
     if breach.size:
         return [f"lock rule not enforced: w exceeds l1 by {w[breach].max() - l1:.3g} m at "
                 f"t={stance.t[breach[0]]:.3f} s while theta1 < 0"]
-    if on_limit[1:].any() and stance.nlp == "ipopt":
+    if on_limit[1:].any() and stance.nlp == choices.IPOPT:
         return [f"lock rule held by the path constraint w <= l1 (IPOPT), first at t={stance.t[np.argmax(on_limit)]:.3f} s"]
     return []
 
@@ -132,16 +139,15 @@ def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> l
 class StepController:
     """Builds and solves the subphase problems of successive steps with one solver."""
 
-    def __init__(self, body: Body, attrs, gains: ControlGains, solver, lock_rule: str = "momentum",
-                 stance_formulation: str = "monitored"):
+    def __init__(self, body: Body, attrs, gains: ControlGains, solver, lock_rule: str = choices.DEFAULT_LOCK_RULE,
+                 stance_formulation: str = choices.DEFAULT_STANCE):
         self.body, self.attrs, self.gains, self.solver = body, attrs, gains, solver
         self.lock_rule = lock_rule
         #: "monitored" (the paper's square stance) or "tracking" (pa free over the grid, IPOPT)
-        self.tracking = stance_formulation == "tracking"
+        self.tracking = stance_formulation == choices.TRACKING
         self.n = solver.intervals
         self.swing_specs = swing_specs(lock_rule)
-        # the first walk on a machine compiles these kernels: all at once, on every core
-        solver.prepare([stance_spec(lock_rule, False), *self.swing_specs.values()])
+        prepare_kernels(solver, lock_rule)
         self.guesses: dict = {}
         self.previous_states: dict = {}
         torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1

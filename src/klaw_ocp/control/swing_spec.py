@@ -18,6 +18,7 @@ from functools import lru_cache
 
 import casadi as ca
 
+from .. import choices
 from ..solvers.problem import SubphaseSpec
 from . import swing_law as law
 from .stance_law import STANCE_CONTEXT, stance_plausible
@@ -28,7 +29,7 @@ SWING2_PATH = ("toe_height", "heel_height")
 SWING3_PATH = ("heel_height",)
 
 
-def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule="momentum"):
+def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule=choices.DEFAULT_LOCK_RULE):
     x, t = ca.SX.sym("x", len(state)), ca.SX.sym("t")
     u, c = ca.SX.sym("u", len(unknowns)), ca.SX.sym("c", _NC)
     args = [x, t, u, c]
@@ -49,7 +50,7 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
 
 
 @lru_cache(maxsize=None)
-def swing_specs(lock_rule: str = "momentum") -> dict:
+def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
     """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
     theta3_error = lambda x, c: x[6] - law.names(c).theta3_target
     return {

@@ -57,6 +57,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import choices
 from ..errors import ConfigError, out_of_range
 from ._checks import as_vector, check_body, choice
 from .evaluate import evaluate
@@ -65,7 +66,7 @@ from .stance import stance_mass_bias
 from .swing import swing_mass_bias
 
 #: Accepted values of the ``rule`` argument of the lock maps (the first is the default).
-LOCK_RULES = ("momentum", "zero")
+LOCK_RULES = choices.LOCK_RULES
 
 #: Keys of :func:`heel_strike_conserved` that the heel-strike map conserves, and those it does not.
 CONSERVED = ("hip", "hip_velocity", "upper_body_momentum", "upper_body_spin",
@@ -180,16 +181,16 @@ def heel_strike_conserved(body, x, ankle, about=None) -> dict:
             "leg_angular_momentum": h_leg, "total_angular_momentum": h_upper + h_leg}
 
 
-def stance_lock_map(body, x, rule: str = "momentum") -> np.ndarray:
+def stance_lock_map(body, x, rule: str = choices.MOMENTUM) -> np.ndarray:
     """Stance state after the leg locks (wd = 0, section 4.2); ``rule`` in :data:`LOCK_RULES`."""
     body = check_body(body)
     x = as_vector("x", x, 6)
-    if choice("rule", rule, LOCK_RULES) == "zero":
+    if choice("rule", rule, LOCK_RULES) == choices.ZERO:
         return np.concatenate([x[:3], [0.0], x[4:]])
     return evaluate(impact_functions()["stance_lock"], x, body.dynamic_parameters())[0]
 
 
-def knee_lock_map(body, x, hip_vel, rule: str = "momentum") -> np.ndarray:
+def knee_lock_map(body, x, hip_vel, rule: str = choices.MOMENTUM) -> np.ndarray:
     """Swing state ``[theta3, theta4, theta3d, theta4d]`` after the knee locks (theta4d = 0, eq. 5).
 
     ``hip_vel`` (m/s, world) is checked but does not change the result: the hip is prescribed, so
@@ -198,6 +199,6 @@ def knee_lock_map(body, x, hip_vel, rule: str = "momentum") -> np.ndarray:
     body = check_body(body)
     x = as_vector("x", x, 4)
     as_vector("hip_vel", hip_vel, 2)
-    if choice("rule", rule, LOCK_RULES) == "zero":
+    if choice("rule", rule, LOCK_RULES) == choices.ZERO:
         return np.concatenate([x[:3], [0.0]])
     return evaluate(impact_functions()["knee_lock"], x, body.dynamic_parameters())[0]

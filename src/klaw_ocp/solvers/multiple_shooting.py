@@ -29,6 +29,7 @@ import time
 
 import numpy as np
 
+from .. import choices
 from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
 from .newton import CONTRACTION, CondensedNewton
@@ -60,10 +61,11 @@ class MultipleShootingSolver:
     (never IPOPT; a violated inequality is reported in the message) or "ipopt" (always).
     """
 
-    name = "multiple-shooting"
+    name = choices.MULTIPLE_SHOOTING
 
-    def __init__(self, intervals: int = 20, substeps: int = 4, tolerance: float = 1e-10,
-                 max_iterations: int = 50, nlp: str = "auto"):
+    def __init__(self, intervals: int = choices.DEFAULT_INTERVALS, substeps: int = choices.SUBSTEPS,
+                 tolerance: float = choices.DEFAULT_TOLERANCE, max_iterations: int = choices.DEFAULT_MAX_ITERATIONS,
+                 nlp: str = choices.DEFAULT_NLP):
         self.intervals, self.substeps = int(intervals), int(substeps)
         self.tolerance, self.max_iterations, self.nlp = float(tolerance), int(max_iterations), nlp
         self._newton: dict = {}   # spec -> CondensedNewton (it keeps the last Jacobian for chord steps)
@@ -177,7 +179,7 @@ class MultipleShootingSolver:
         return best_u, best_xs
 
     def _finish(self, pb, nodes, u, iterations, call: _Call, message, success_hint, kernels,
-                nlp="rootfinder", residual=None) -> SubphaseSolution:
+                nlp=choices.ROOTFINDER, residual=None) -> SubphaseSolution:
         """The solution from its node states 1..N, checked: residual and defects of the discrete
         trajectory returned (``residual``: Newton's own, of this very point), path margins,
         plausibility."""
@@ -288,7 +290,7 @@ class MultipleShootingSolver:
             z0 = np.asarray(sol["x"]).ravel()
             result = self._finish(pb, z0[: n * spec.nx], z0[n * spec.nx:], iterations, call,
                                   "" if stats.get("success") else str(stats.get("return_status")),
-                                  bool(stats.get("success")), kernels, "ipopt")
+                                  bool(stats.get("success")), kernels, choices.IPOPT)
             if not result.success:
                 break
         if result.path_min < -1e-7:
@@ -304,12 +306,12 @@ class MultipleShootingSolver:
             raise ValueError(f"{pb.spec.name}: grid has {pb.grid.size - 1} intervals, solver {self.intervals}")
         has_path = pb.spec.path is not None and pb.path_lower is not None
         # straight to IPOPT: an optimisation with a warm start, or nlp="ipopt" on an inequality problem
-        if (self._warm(pb) if pb.optimize else self.nlp == "ipopt" and has_path):
+        if (self._warm(pb) if pb.optimize else self.nlp == choices.IPOPT and has_path):
             return self._solve_ipopt(pb, call, None)
         result = self._solve_square(pb, call)
         violated = has_path and result.path_min < 0
         # a cold optimisation, or a repair, starts from the square solution: a nearby trajectory
-        if pb.optimize or (violated and self.nlp != "rootfinder"):
+        if pb.optimize or (violated and self.nlp != choices.ROOTFINDER):
             if not pb.optimize:
                 call.note("ipopt-repair")
             return self._solve_ipopt(pb, call, result if result.success else None)

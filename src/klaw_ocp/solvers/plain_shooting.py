@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from .. import choices
 
 from .events import EventIntegrator
 from .integrator import prepare_kernels, subphase_kernels
@@ -29,9 +30,10 @@ from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
 class PlainShootingSolver:
     """Forward shooting; see the module docstring. ``max_iterations`` bounds the shots per 1-D solve."""
 
-    name = "plain-shooting"
+    name = choices.PLAIN_SHOOTING
 
-    def __init__(self, intervals: int = 20, substeps: int = 4, tolerance: float = 1e-10,
+    def __init__(self, intervals: int = choices.DEFAULT_INTERVALS, substeps: int = choices.SUBSTEPS,
+                 tolerance: float = choices.DEFAULT_TOLERANCE,
                  max_iterations: int = 60, bisection_steps: int = 4, max_sweeps: int = 40,
                  max_recovery_steps: int = 400):
         self.intervals, self.substeps = int(intervals), int(substeps)
@@ -364,5 +366,5 @@ class PlainShootingSolver:
             msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
         return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
                                 times, states, forces, res, shots, bool(ok), time.perf_counter() - wall0,
-                                msg if not ok or recovery else "", path_min, log, "bisection-secant",
+                                msg if not ok or recovery else "", path_min, log, choices.BISECTION_SECANT,
                                 fallbacks=list(self._fallbacks))
