@@ -3,7 +3,7 @@
     cd /work/wt-body && PYTHONPATH=src python benchmarks/bench_human.py [CONFIG] [--steps 10] [--fps 200]
 
 For the natural walk (configs/natural_walk.yaml: 1.8 m, 80 kg) at 3, 5 and 6 km/h it simulates a
-short walk (``--steps``, default 10), puts the body on it (``kinematics.body_motion`` at ``--fps``,
+short walk (``--steps``, default 10), puts the body on it (``body_motion`` at ``--fps``,
 default 200) and measures, over the steady gait cycles (heel strike to the next heel strike of
 the same leg, both legs; cycles that start in the first two steps are the start and are left
 out), the figures gait labs measure people by: knee, thigh, hip and ankle angles at and between
@@ -27,8 +27,8 @@ import numpy as np
 import yaml
 
 import klaw_ocp
-from klaw_ocp.kinematics.body_motion import body_motion
-from klaw_ocp.kinematics.skeleton import ANGLE_NAMES
+from klaw_ocp.body_motion import body_motion
+from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
 from klaw_ocp.results import foot_events, walk_table
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -46,9 +46,9 @@ import tempfile
 import time
 from dataclasses import replace
 
+from klaw_ocp.body_motion import body_motion
 from klaw_ocp.config import load_config
 from klaw_ocp.io import render_walk, write_rendered
-from klaw_ocp.kinematics.body_motion import body_motion
 from klaw_ocp.walk import simulate_walk, walk_spec
 
 MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))

@@ -16,6 +16,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from klaw_ocp.body_motion.swing_foot_guard import grounded_angles, guard_grid, lifted_foot
 from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.control.stance_law import STANCE_CONTEXT
 from klaw_ocp.control.step import StepController
@@ -192,7 +193,7 @@ def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense,
     ankle = knee - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)])
     schedule = swing_foot_schedule(context)
     theta5, theta6 = (schedule.angles(dense.t) if swing_leg is None
-                      else schedule.grounded_angles(body, dense.t, swing_leg))
+                      else grounded_angles(body, schedule, dense.t, swing_leg))
     toe, heel = np.empty(len(dense.t)), np.empty(len(dense.t))
     for i in range(len(dense.t)):
         foot_heel, _, foot_toe = foot_points_float(ankle[i, 0], ankle[i, 1], theta3[i] + theta4[i], theta5[i],
@@ -203,7 +204,7 @@ def swing_foot_heights(body, origin_x: float, name: str, context, dense: Dense,
 
 def swing_body_lift(recorded: RecordedWalk, step):
     """times -> how far the body lifts the swing ankle above the dynamic leg's
-    (SwingFoot.lifted_foot), from the dense samples of swing1, swing2 and swing3."""
+    (body_motion.swing_foot_guard.lifted_foot), from the dense samples of swing1, swing2 and swing3."""
     body, t, hip, ankle, shank = recorded.body, [], [], [], []
     for name in ("swing1", "swing2", "swing3"):
         dense = recorded.dense(step.index, name)
@@ -216,15 +217,15 @@ def swing_body_lift(recorded: RecordedWalk, step):
                      - body.l4 * np.column_stack([np.sin(theta3 + theta4), np.cos(theta3 + theta4)]))
         shank.append(theta3 + theta4)
     t, hip, ankle, shank = np.concatenate(t), np.vstack(hip), np.vstack(ankle), np.concatenate(shank)
-    grid = step.swing_foot.guard_grid()
+    grid = guard_grid(step.swing_foot)
     on_grid = lambda v: np.column_stack([np.interp(grid, t, c) for c in np.atleast_2d(v.T)])
-    _, _, lift = step.swing_foot.lifted_foot(body, grid, grid, on_grid(hip), on_grid(ankle), on_grid(shank)[:, 0])
+    _, _, lift = lifted_foot(body, step.swing_foot, grid, grid, on_grid(hip), on_grid(ankle), on_grid(shank)[:, 0])
     return lambda times: np.interp(times, grid, lift)
 
 
 def swing_leg_function(recorded: RecordedWalk, step):
     """times -> (ankle height, shank angle) of a step's swing leg, linear between the dense samples
-    of swing1, swing2 and swing3 (what the body's foot needs: SwingFoot.grounded_angles)."""
+    of swing1, swing2 and swing3 (what the body's foot needs: body_motion.swing_foot_guard.grounded_angles)."""
     t, ankle_y, shank = [], [], []
     for name in ("swing1", "swing2", "swing3"):
         dense = recorded.dense(step.index, name)

@@ -1,15 +1,14 @@
 """The body's guards against a swing foot in the ground and against a step's curve read across a
-heel strike (kinematics/swing_foot.py: ankle_lift; kinematics/walk_samples.py: StepCurves)."""
+heel strike (body_motion/swing_foot_guard.py: ankle_lift; body_motion/walk_samples.py: StepCurves)."""
 import math
 
 import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion.swing_foot_guard import GUARD_GRID, GUARD_RATE, ankle_lift
+from klaw_ocp.body_motion.walk_samples import StepCurves
 from klaw_ocp.kinematics.leg_geometry import knee_flexion_for_reach, leg_ik, reach_for_knee_flexion
-from klaw_ocp.kinematics.swing_feet import ankle_lift
-from klaw_ocp.kinematics.swing_foot import GUARD_GRID, GUARD_RATE
-from klaw_ocp.kinematics.walk_samples import StepCurves
 
 BODY = Body(height=1.8, mass=80.0)
 

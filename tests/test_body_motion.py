@@ -1,4 +1,4 @@
-"""The body on the simulated walk (kinematics/body_motion.py, docs/body.md): the 56 angles are
+"""The body on the simulated walk (body_motion/motion.py, docs/body.md): the 56 angles are
 checked through the skeleton's own forward kinematics of angles.csv's degrees, not through the
 arrays they were computed from. Feet stay planted, bones keep their lengths, the hips are the
 pelvis's, nothing jumps between frames, and the attributes of the lateral geometry and the upper
@@ -12,20 +12,20 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion import ANGLES_COLUMNS, body_motion
+from klaw_ocp.body_motion.motion import swing_hips, toe_off_feet
+from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics
+from klaw_ocp.body_motion.stance_legs import stance_frames
+from klaw_ocp.body_motion.swing_legs import TOE_OFF_BLEND, swing_legs
+from klaw_ocp.body_motion.walk_samples import frame_times, hermite, spline_rates, swing_curves
 from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.dynamics import stance_hips
-from klaw_ocp.dynamics.kinematics import foot_points_arrays, foot_points_float
-from klaw_ocp.gait import LocomotionAttributes
+from klaw_ocp.dynamics.points import foot_points_arrays, foot_points_float
+from klaw_ocp.gait import LocomotionAttributes, stance_leg
 from klaw_ocp.io.run_data import RunData
 from klaw_ocp.io.writers import angles_csv
-from klaw_ocp.kinematics.body_motion import ANGLES_COLUMNS, body_motion, swing_hips, toe_off_feet
 from klaw_ocp.kinematics.leg_geometry import leg_ik
-from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, forward_kinematics
-from klaw_ocp.kinematics.stance_legs import stance_frames
-from klaw_ocp.kinematics.swing_legs import TOE_OFF_BLEND, swing_legs
 from klaw_ocp.kinematics.virtual_leg import hind_foot_at_rest
-from klaw_ocp.kinematics.walk_samples import frame_times, hermite, spline_rates, swing_curves
-from klaw_ocp.results import stance_leg
 from klaw_ocp.walk import simulate_walk, walk_spec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,10 +62,11 @@ def _skeleton(walk, table):
 
 def _stances(walk):
     """(side, StanceFoot, walk time of its heel strike) of every foot that stands in the walk:
-    step 0's hind foot (standing when the walk begins) and each step's stance foot."""
+    step 0's hind foot (standing when the walk begins) and each step's stance foot, completed by
+    the next step's double support where the walk has one."""
     first = walk.steps[0]
     hind = ("left" if stance_leg(0) == "right" else "right", first.hind_foot, first.t_start - first.hind_foot.t_step)
-    return [hind] + [(stance_leg(s.index), s.stance_foot, s.t_start) for s in walk.steps]
+    return [hind] + [(stance_leg(s.index), walk.stance_foot(s.index), s.t_start) for s in walk.steps]
 
 
 # -- angles.csv -------------------------------------------------------------------------------
@@ -283,10 +284,10 @@ def test_swing_foot_points_for_arrays_equal_the_float_form():
 
 
 def test_many_stances_at_once_are_each_stance_alone(short_walk):
-    """kinematics.stance_legs: one pass over every stance of a walk gives what one call per stance
+    """body_motion.stance_legs: one pass over every stance of a walk gives what one call per stance
     gives, to rounding (each stance is evaluated in its own foot's frame), which a knee within
     rounding of straight turns into 1e-8 rad (the flexion grows as the root of the shortening)."""
-    feet = [short_walk.steps[0].hind_foot] + [s.stance_foot for s in short_walk.steps]
+    feet = [short_walk.steps[0].hind_foot] + [short_walk.stance_foot(k) for k in range(len(short_walk.steps))]
     t = [np.linspace(0.0, min(f.t_toe_off, f.t_step + 0.1), 37) for f in feet]
     hips = [np.column_stack([f.foot.ankle_x + np.linspace(-0.35, 0.45, 37), np.full(37, 0.9)]) for f in feet]
     together = stance_frames(feet, np.repeat(np.arange(len(feet)), 37), np.concatenate(t), np.vstack(hips))
@@ -302,7 +303,7 @@ def test_the_foot_comes_down_as_fast_as_the_hip_approaches_it_at_heel_strike(sho
     """The leg is straight at heel strike; the hip-ankle distance then starts still, so the knee
     bends at a finite rate (a shortening rate would bend it as sqrt(t))."""
     step = short_walk.steps[1]
-    foot = step.stance_foot
+    foot = short_walk.stance_foot(1)
     stance = step.subphase("stance")
     hips, velocities = stance_hips(short_walk.spec.body, stance.states[:1], np.array([step.origin_x, short_walk.spec.body.l9]))
     dt = np.array([0.0, 1e-4, 2e-4])
@@ -317,7 +318,7 @@ def test_the_foot_comes_down_as_fast_as_the_hip_approaches_it_at_heel_strike(sho
 
 def test_the_heel_rises_from_the_ground_at_heel_off(short_walk):
     step = short_walk.steps[1]
-    foot, stance = step.stance_foot, step.subphase("stance")
+    foot, stance = short_walk.stance_foot(1), step.subphase("stance")
     hip = np.array([[np.interp(foot.t_heel_off, stance.t, step.stance_hips[:, k]) for k in range(2)]])
     just_after = foot.pitch(np.array([foot.t_heel_off + 1e-9]), hip)
     assert 0.0 <= just_after[0] < 1e-5
@@ -333,7 +334,7 @@ def test_a_foot_that_stood_still_starts_its_push_off_from_rest():
 
 
 def test_the_body_swing_knee_is_the_dynamic_knee_between_the_toe_off_and_landing_blends(short_walk):
-    """kinematics/swing_legs.py: the swing leg hangs from its own hip in its plane with the
+    """body_motion/swing_legs.py: the swing leg hangs from its own hip in its plane with the
     dynamics' hip-to-ankle distance, so its knee is the dynamic θ4 once the blend out of the
     virtual leg's toe-off posture is over and until swing3, where it blends into the next stance's
     landing (no lift in this walk: the turned foot clears); it starts from the virtual leg's
@@ -352,7 +353,7 @@ def test_the_body_swing_knee_is_the_dynamic_knee_between_the_toe_off_and_landing
         # 1e-7: at the straight knee of swing3 a round-off of the distance is 1e-8 rad of knee
         assert knee[1:-1] == pytest.approx(swing_curves(walk)(steps[1:-1], tau[1:-1])[:, 1], abs=1e-7), k
         if k + 1 < len(walk.steps):
-            lands = walk.steps[k + 1].stance_foot
+            lands = walk.stance_foot(k + 1)
             at_strike = lands.frames(np.array([0.0]), leg["hip"][-1:])
             assert leg["ankle"][-1] == pytest.approx(at_strike.ankle[0], abs=1e-9), k
             assert leg["heel"][-1] == pytest.approx([lands.foot.ankle_x - body.l8, 0.0], abs=1e-9), k

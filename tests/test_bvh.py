@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, JOINTS, forward_kinematics
 from klaw_ocp.io.bvh import AXES, BVH_FILE, Bvh, bvh_text, read_bvh, write_bvh
 from klaw_ocp.io.run_data import RunData
 from klaw_ocp.io.writers import events_csv, render_run, write_rendered
-from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, JOINTS, forward_kinematics
 
 FPS = 30.0
 CONFIG = {"name": "t", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": 3}}
@@ -37,7 +37,7 @@ def walk():
 
 @pytest.fixture(scope="module")
 def motion(walk):
-    from klaw_ocp.kinematics.body_motion import body_motion
+    from klaw_ocp.body_motion import body_motion
     return body_motion(walk, FPS)
 
 

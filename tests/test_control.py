@@ -26,7 +26,7 @@ from klaw_ocp.control.swing_law import (SWING_CONTEXT, curve_p, swing1_forces, s
                                         swing3_torque)
 from klaw_ocp.control.torques import (decaying_exponential, hip_height_reference, leg_force, spring_damper,
                                       step_torque)
-from klaw_ocp.dynamics.kinematics import foot_points_float
+from klaw_ocp.dynamics.points import foot_points_float
 from klaw_ocp.gait import LocomotionAttributes
 
 BODY = Body(1.8, 80)
@@ -313,7 +313,7 @@ def test_the_toe_under_the_knee_is_solved_in_closed_form():
     """curve_p.toe_under_knee: the shank angle at which the toe tip (dynamics.foot_points_float) is
     directly under the knee, for ankle angles 60-160° and toe angles 0-40°, to round-off."""
     import math
-    from klaw_ocp.dynamics.kinematics import foot_points_float
+    from klaw_ocp.dynamics.points import foot_points_float
     body = Body(height=1.8, mass=80.0)
     rng = np.random.default_rng(7)
     for _ in range(500):

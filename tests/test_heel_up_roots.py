@@ -10,10 +10,9 @@ import pytest
 from hypothesis import example, given, settings, strategies as st
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion.swing_foot_guard import GUARD_RATE, rate_limited_turn
 from klaw_ocp.gait.attributes import LocomotionAttributes
 from klaw_ocp.kinematics.heel_up_roots import MAX_PITCH
-from klaw_ocp.kinematics.swing_feet import rate_limited_turn
-from klaw_ocp.kinematics.swing_foot import GUARD_RATE
 from klaw_ocp.kinematics.virtual_leg import StanceFoot
 
 BODY = Body(1.8, 80)
@@ -144,7 +143,7 @@ def test_many_hips_at_once_are_each_hip_alone():
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.floats(-0.3, 0.3), min_size=2, max_size=300), st.integers(0, 2 ** 32 - 1))
 def test_the_rate_limited_turn_is_the_cone_envelope_by_its_definition(shape, seed):
-    """The swing foot's turn away from its schedule (SwingFoot.grounded_angles) in O(n) equals
+    """The swing foot's turn away from its schedule (swing_foot_guard.grounded_angles) in O(n) equals
     its n x n definition: max_j(part_j - rate |t_i - t_j|), capped by the cones from both ends."""
     grid = 0.1 + 0.002 * np.arange(len(shape))
     required = np.array(shape) * (np.random.default_rng(seed).random(len(shape)) < 0.3)

@@ -1,14 +1,15 @@
 """Where the virtual leg meets the swing (docs/body.md): the landing with the knee flexed where a
 straight leg cannot follow the stance leg's compression (kinematics/landing.py), the push-off that
 begins in single support where the double support is short (kinematics/pitch_rules.py), and the
-swing foot's ground guard on a steep foot (kinematics/swing_foot.py)."""
+swing foot's ground guard on a steep foot (body_motion/swing_foot_guard.py)."""
 import math
 
 import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
-from klaw_ocp.dynamics.kinematics import stance_hip
+from klaw_ocp.body_motion.swing_foot_guard import ground_limits
+from klaw_ocp.dynamics.points import stance_hip
 from klaw_ocp.kinematics.landing import LANDING_JOINT_RATE, LANDING_KNEE_MAX, starting_rates
 from klaw_ocp.kinematics.pitch_rules import MIN_PUSH_OFF, REACH_FRACTION
 from klaw_ocp.kinematics.swing_foot import SwingFoot
@@ -75,8 +76,8 @@ def test_a_fast_walk_lands_on_a_flexed_knee_whose_joints_start_within_the_rate(f
 def test_the_swing_leg_of_a_fast_walk_lands_without_a_jump(fast):
     """The body's swing leg bends into the landing posture over swing3: at 500 fps no angle of
     the legs moves by 2° or more across any heel strike."""
-    from klaw_ocp.kinematics.body_motion import body_motion
-    from klaw_ocp.kinematics.skeleton import ANGLE_NAMES
+    from klaw_ocp.body_motion import body_motion
+    from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
     motion = body_motion(fast, 500.0)
     legs = [k for k, name in enumerate(ANGLE_NAMES) if name[2:].startswith(("hip_flexion", "knee", "ankle"))]
     for step in fast.steps[1:]:
@@ -92,7 +93,8 @@ def test_a_short_double_support_starts_the_push_off_in_single_support():
     walk = simulate_walk({"name": "s", "body": {"height": 1.8, "mass": 80},
                           "walk": {"speed": 5.0, "step_length": 0.5, "steps": 4}}, method="multiple-shooting")
     step = walk.steps[1]
-    foot = step.stance_foot                  # completed by step 2's double support
+    foot = walk.stance_foot(1)               # completed by step 2's double support
+    assert foot is walk.steps[2].hind_foot and foot.complete and not step.stance_foot.complete
     assert foot.t_toe_off - foot.t_step < MIN_PUSH_OFF
     assert foot.t_push == pytest.approx(foot.t_toe_off - MIN_PUSH_OFF, abs=1e-12)
     t = np.linspace(foot.t_push - 0.01, foot.t_toe_off, 400)
@@ -130,5 +132,5 @@ def test_the_ground_guard_leaves_a_steep_foot_whose_points_cannot_reach_the_grou
                      math.radians(90.0), 0.0)
     t = np.array([0.0])
     shank = math.radians(42.0)
-    theta5, _ = foot.ground_limits(body, t, np.array([0.26]), np.array([shank]))
+    theta5, _ = ground_limits(body, foot, t, np.array([0.26]), np.array([shank]))
     assert theta5[0] == pytest.approx(math.radians(43.0), abs=1e-12)

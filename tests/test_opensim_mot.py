@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics, rest_root_position
 from klaw_ocp.io.opensim import (MOT_COLUMNS, MODEL_PELVIS_HEIGHT, mot_columns, mot_text,
                                  translation_scale, write_mot)
-from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, forward_kinematics, rest_root_position
 
 BODY = Body(1.8, 80)
 
@@ -256,7 +256,7 @@ def test_the_models_hip_midpoint_follows_our_root_scaled():
 @pytest.fixture(scope="module")
 def walk_table():
     import klaw_ocp
-    from klaw_ocp.kinematics.body_motion import body_motion
+    from klaw_ocp.body_motion import body_motion
     walk = klaw_ocp.simulate_walk({"name": "t", "body": {"height": 1.8, "mass": 80},
                                    "walk": {"speed": 5.0, "steps": 3}})
     return walk.spec.body, body_motion(walk, 30).table()

@@ -18,7 +18,7 @@ from klaw_ocp.io.gait_diagram import gait_bars, gait_events, representative_step
 from klaw_ocp.io.plot_style import DPI, LEG_COLOURS, encode_png, png_bytes
 from klaw_ocp.io.plots import PLOTS, boundaries, render_plots, subphase_lines, swing2_recoveries
 from klaw_ocp.io.strobe import draw_posture, draw_strobe, legs_figure, pose_points, sample_at, strobe_rows
-from klaw_ocp.results import stance_leg
+from klaw_ocp.gait import stance_leg
 from klaw_ocp.walk import simulate_walk
 
 ROOT = Path(__file__).resolve().parents[1]

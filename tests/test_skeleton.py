@@ -1,4 +1,4 @@
-"""The 37-joint, 56-angle skeleton (kinematics/skeleton.py) and its inverse (kinematics/pose.py)."""
+"""The 37-joint, 56-angle skeleton (body_motion/skeleton.py) and its inverse (body_motion/pose.py)."""
 from __future__ import annotations
 
 import dataclasses
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
-from klaw_ocp.kinematics import pose
-from klaw_ocp.kinematics.skeleton import (ANGLE_NAMES, CERVICAL, END_SITES, JOINTS, LUMBAR, THORACIC,
-                                          VERTEBRAE, angle_index, forward_kinematics, joint_index,
-                                          local_rotations, rest_offsets, rest_root_position,
-                                          segment_lengths, zxy_angles, zxy_matrices)
+from klaw_ocp.body_motion import pose
+from klaw_ocp.body_motion.skeleton import (ANGLE_NAMES, CERVICAL, END_SITES, JOINTS, LUMBAR, THORACIC,
+                                           VERTEBRAE, angle_index, forward_kinematics, joint_index,
+                                           local_rotations, rest_offsets, rest_root_position,
+                                           segment_lengths, zxy_angles, zxy_matrices)
 
 GEOMETRY_TOL = 1e-9   # m and rad: exact geometry, far above double round-off, far below any error
 BODIES = [Body(1.8, 75.0), Body(1.2, 25.0)]

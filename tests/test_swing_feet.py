@@ -1,12 +1,12 @@
-"""Every step's swing foot in one pass (kinematics/swing_feet.py) is the per-step form
-(SwingFoot.lifted_foot) to the last bit, on real walks: in the body's swing legs and in the
+"""Every step's swing foot in one pass (body_motion/swing_foot_guard.py: lifted_feet) is the
+per-step form (lifted_foot) to the last bit, on real walks: in the body's swing legs and in the
 summary's swing-foot clearance."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from klaw_ocp.kinematics.swing_feet import lifted_feet
+from klaw_ocp.body_motion.swing_foot_guard import guard_grid, lifted_feet, lifted_foot, sole_heights
 from klaw_ocp.results import hip_offsets, swing_foot_clearance, swing_foot_clearances
 from klaw_ocp.walk import simulate_walk
 
@@ -31,11 +31,11 @@ def _dynamic_leg_on_grid(body, step, grid):
 def test_every_step_at_once_is_each_step_alone(walk):
     body, steps = walk.spec.body, walk.steps
     feet = [step.swing_foot for step in steps]
-    grids = [foot.guard_grid() for foot in feet]
+    grids = [guard_grid(foot) for foot in feet]
     times = [np.linspace(foot.t_toe_off, foot.t_heel_strike, 7 + k)[::-1] for k, foot in enumerate(feet)]
     legs = [_dynamic_leg_on_grid(body, step, grid) for step, grid in zip(steps, grids)]
     together = lifted_feet(body, feet, times, grids, *(np.concatenate(part) for part in zip(*legs)))
-    alone = [foot.lifted_foot(body, t, grid, *leg) for foot, t, grid, leg in zip(feet, times, grids, legs)]
+    alone = [lifted_foot(body, foot, t, grid, *leg) for foot, t, grid, leg in zip(feet, times, grids, legs)]
     for got, expected in zip(together, zip(*alone)):
         # to round-off: numpy's transcendental loops may differ by an ulp between array lengths
         np.testing.assert_allclose(got, np.concatenate(expected), rtol=0, atol=1e-12)
@@ -55,7 +55,6 @@ def test_the_summary_clearance_of_all_steps_is_each_steps_own(walk):
 
 def _per_step_clearance(body, step, hips):
     """The summary's clearance as it was computed before the one-pass form, step by step."""
-    from klaw_ocp.kinematics.swing_foot import sole_heights
     names = ("swing1", "swing2", "swing3")
     subs = [step.subphase(name) for name in names]
     t = np.concatenate([sub.t for sub in subs])
@@ -65,10 +64,10 @@ def _per_step_clearance(body, step, hips):
     shank = x[:, 6] + theta4
     ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
         - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
-    grid = step.swing_foot.guard_grid()
+    grid = guard_grid(step.swing_foot)
     on_grid = lambda v: np.interp(grid, t, v)
-    theta5, theta6, lift = step.swing_foot.lifted_foot(
-        body, t, grid, np.column_stack([on_grid(hips[:, 0]), on_grid(hips[:, 1])]),
+    theta5, theta6, lift = lifted_foot(
+        body, step.swing_foot, t, grid, np.column_stack([on_grid(hips[:, 0]), on_grid(hips[:, 1])]),
         np.column_stack([on_grid(ankle[:, 0]), on_grid(ankle[:, 1])]), on_grid(shank))
     heel, toe = sole_heights(body, ankle[:, 1] + lift, shank, theta5, theta6)
     inside = (t > t[0]) & (t < t[-1])

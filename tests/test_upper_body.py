@@ -1,4 +1,4 @@
-"""The upper body and the lateral displacement (kinematics/upper_body.py, docs/upper-body.md):
+"""The upper body and the lateral displacement (body_motion/upper_body.py, docs/upper-body.md):
 §2.4 principle 3 and the determinants of gait of §4.2."""
 import math
 
@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body import Body
+from klaw_ocp.body_motion import pose
+from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics, rest_root_position
+from klaw_ocp.body_motion.upper_body import (ELBOW_MIN_FLEXION, LATERAL_PEAK_SINGLE_SUPPORT_FRACTION,
+                                             REFERENCE_HIP_HALF_RANGE, SHOULDER_MEAN_FLEXION,
+                                             SHOULDER_ROTATION_SHARE, THORAX_COUNTER_ROTATION,
+                                             StepWindow, lateral_displacement, upper_body_motion)
 from klaw_ocp.gait import LocomotionAttributes
-from klaw_ocp.kinematics import pose
-from klaw_ocp.kinematics.skeleton import ANGLE_NAMES, forward_kinematics, rest_root_position
-from klaw_ocp.kinematics.upper_body import (ELBOW_MIN_FLEXION, LATERAL_PEAK_SINGLE_SUPPORT_FRACTION,
-                                            REFERENCE_HIP_HALF_RANGE, SHOULDER_MEAN_FLEXION,
-                                            SHOULDER_ROTATION_SHARE, THORAX_COUNTER_ROTATION,
-                                            StepWindow, lateral_displacement, upper_body_motion)
 
 DEFAULTS = LocomotionAttributes.defaults()
 BODY = Body(1.8, 75.0)

@@ -1,5 +1,6 @@
 """The virtual leg (§4.2, figure 6; kinematics/virtual_leg.py): a human leg on the telescopic
 stance leg, through its three foot periods, checked on real walks."""
+import dataclasses
 import math
 
 import numpy as np
@@ -20,8 +21,30 @@ def legs(request):
     method, name = request.param
     walk = simulate_walk({"name": "v", "body": {"height": 1.8, "mass": 80}, "walk": WALKS[name]}, method=method)
     assert walk.status == "ok"
-    frames = [step.stance_leg_frames() for step in walk.steps if step.stance_leg_frames is not None]
-    return walk, [f for f in frames if f is not None]
+    frames = [walk.stance_leg_frames(k) for k in range(len(walk.steps))]
+    # every stance leg but the last is completed by the next step's double support
+    assert frames[-1] is None and all(f is not None for f in frames[:-1])
+    return walk, frames[:-1]
+
+
+def test_each_step_is_built_once_and_the_next_one_completes_its_stance_leg(legs):
+    """A solved step is frozen. Its ``stance_foot`` holds the rules its own stance fixed (heel
+    strike, foot flat, heel-off; no toe-off yet); the walk's ``stance_foot(k)`` is the next step's
+    ``hind_foot``: the same rules, the double support's added to them, none of its own changed.
+    The last step's stance leg is its own rules."""
+    walk, _ = legs
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        walk.steps[0].stance_foot = walk.steps[0].hind_foot
+    own_fields = ("foot", "rocker_pitch", "rocker_theta6", "t_flat", "heel_off_theta5", "meta_off_theta6",
+                  "t_step", "t_heel_off", "rocker_rate", "single_t", "single_pitch", "landing_knee")
+    for k, step in enumerate(walk.steps):
+        own, completed = step.stance_foot, walk.stance_foot(k)
+        assert not own.complete
+        if k + 1 == len(walk.steps):
+            assert completed is own
+            continue
+        assert completed is walk.steps[k + 1].hind_foot and completed.complete
+        assert all(getattr(completed, name) == getattr(own, name) for name in own_fields), k
 
 
 def _distance(a, b):
@@ -91,7 +114,8 @@ def test_heel_strike_and_heel_off_follow_the_attributes(legs):
     the flat foot is out of reach); meta-off where θ6 reaches meta_off_theta6, which it then keeps."""
     walk, frames = legs
     attrs = walk.spec.attributes
-    feet = [step.stance_foot for step in walk.steps if step.stance_leg_frames() is not None]
+    feet = [walk.stance_foot(k) for k in range(len(walk.steps) - 1)]
+    assert len(feet) == len(frames) and all(foot.complete for foot in feet)
     for foot, f in zip(feet, frames):
         if f.pitch[0] == 0:
             continue      # a start from rest: the foot stands flat

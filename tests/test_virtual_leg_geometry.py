@@ -10,7 +10,7 @@ import pytest
 from hypothesis import example, given, settings, strategies as st
 
 from klaw_ocp.body import Body
-from klaw_ocp.dynamics.kinematics import foot_points_float
+from klaw_ocp.dynamics.points import foot_points_float
 from klaw_ocp.gait.attributes import LocomotionAttributes
 from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, PUSH_EASE_FROM_REST, REACH_FRACTION, FlatFoot,
                                              StanceFoot, ankle_angle, hind_foot_at_rest, leg_ik, toe_off_pitch)

@@ -184,8 +184,8 @@ def _swing_feet():
 
 
 def test_the_turned_swing_foot_stays_above_the_ground_wherever_a_foot_fits():
-    """Toe tip and heel of the dynamic leg's swing foot as the body turns it (kinematics/
-    swing_foot.py: the schedule, turned where it would enter the ground), before any lift, above
+    """Toe tip and heel of the dynamic leg's swing foot as the body turns it (body_motion/
+    swing_foot_guard.py: the schedule, turned where it would enter the ground), before any lift, above
     the ground on the dense grid of swing1, swing2 and swing3, in every step of every walk of the
     coarse grid in both modes but first steps from rest and closing steps, wherever the ankle is
     at least l9 up (a flat foot fits there). Between the nodes, where swing2's toe clearance is a
@@ -203,7 +203,7 @@ def test_the_turned_swing_foot_stays_above_the_ground_wherever_a_foot_fits():
 
 def test_the_body_swing_foot_stays_above_the_ground_everywhere():
     """The body's swing foot (turned, and lifted with the ankle by the knee's bend where the
-    dynamic leg is too low for any foot: SwingFoot.lifted_foot) above the ground on the dense
+    dynamic leg is too low for any foot: swing_foot_guard.lifted_foot) above the ground on the dense
     grid of every swing subphase of every step of the coarse grid in both modes, first steps from
     rest and closing steps included, where the dynamic ankle comes up to 25 mm below l9. A step
     whose turned foot clears the ground throughout is not lifted at all."""

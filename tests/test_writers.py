@@ -56,6 +56,6 @@ def test_dynamics_csv_is_what_the_csv_module_writes():
 def test_the_tables_knee_rates_are_numpys_gradient_bit_for_bit(x):
     """dynamics.csv's and the body's finite-difference rates (walk_samples.gradient): np.gradient's
     numbers."""
-    from klaw_ocp.kinematics.walk_samples import gradient
+    from klaw_ocp.body_motion.walk_samples import gradient
     f = np.sin(7 * x) + x ** 3
     np.testing.assert_array_max_ulp(gradient(f, x), np.gradient(f, x), maxulp=1)   # a numpy release may reorder

@@ -14,22 +14,23 @@ hip_x/hip_y are world coordinates (m), x forward from the first stance ankle, y 
 lowest at the two heel strikes, a raised-cosine bump of the step's excursion in between.
 
 The summary gives each step its ``stance_leg`` (step 0's stance leg is the right leg; the legs
-alternate), its ``hip_reference`` (the sinusoid's heel-strike heights, excursion and the floor the
-hip must not drop below, world y, m) and each subphase the unit of every parameter.
+alternate: :func:`klaw_ocp.gait.stance_leg`), its ``hip_reference`` (the sinusoid's heel-strike
+heights, excursion and the floor the hip must not drop below, world y, m) and each subphase the
+unit of every parameter.
 """
 from __future__ import annotations
 
 import casadi as ca
 import numpy as np
 
+from .body_motion.swing_foot_guard import guard_grid, lifted_feet, sole_heights
+from .body_motion.walk_samples import gradient
 from .control.parameter_units import parameter_unit
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
 from .errors import finite_real
+from .gait.plan import stance_leg
 from .kinematics.leg_geometry import leg_fk
-from .kinematics.swing_feet import lifted_feet
-from .kinematics.swing_foot import sole_heights
-from .kinematics.walk_samples import gradient
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
            "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -129,11 +130,6 @@ def _hip_reference_curves(steps, body, times: list) -> list:
     return out
 
 
-def stance_leg(index: int) -> str:
-    """Which leg is the stance leg of step ``index``: step 0's is the right leg, then they alternate."""
-    return "right" if index % 2 == 0 else "left"
-
-
 def walk_table(walk, offsets: list | None = None) -> dict:
     """Column name -> array (``subphase`` is an array of str); ``offsets``: the walk's
     :func:`hip_offsets`, when the caller has them."""
@@ -167,8 +163,8 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
     """The swing foot's lowest toe tip and heel (m above the ground) at the swing's samples
     between toe-off and heel strike (both ends excluded: there the toe, then the heel, touch the
     ground by definition), and its lowest toe in swing2 (the mid-swing toe clearance that
-    ``toe_clearance`` bounds). The foot is the body's (kinematics/swing_foot.py: turned, and
-    lifted with the ankle where the dynamic leg is too low for a foot), on the leg interpolated
+    ``toe_clearance`` bounds). The foot is the body's (body_motion/swing_foot_guard.py: turned,
+    and lifted with the ankle where the dynamic leg is too low for a foot), on the leg interpolated
     linearly between the samples (``hips``: the step's :func:`walk_hips`, when the caller has
     them); ``ankle_lift_max_m`` is how far the body lifted the ankle above the dynamic leg's."""
     return swing_foot_clearances(body, [step], [hips])[0]
@@ -176,10 +172,10 @@ def swing_foot_clearance(body, step, hips: list | None = None) -> dict:
 
 def swing_foot_clearances(body, steps: list, hips: list) -> list[dict]:
     """:func:`swing_foot_clearance` of each of ``steps`` (``hips[k]`` may be None), every step's
-    foot in one pass (:func:`klaw_ocp.kinematics.swing_feet.lifted_feet`)."""
+    foot in one pass (:func:`klaw_ocp.body_motion.swing_foot_guard.lifted_feet`)."""
     names = ("swing1", "swing2", "swing3")
     legs = [_swing_leg(body, step, step_hips, names) for step, step_hips in zip(steps, hips)]
-    grids = [step.swing_foot.guard_grid() for step in steps]
+    grids = [guard_grid(step.swing_foot) for step in steps]
     on_grids = [[np.interp(grid, t, v) for v in (*hip.T, *ankle.T, shank)]
                 for grid, (t, hip, ankle, shank) in zip(grids, legs)]
     stacked = np.concatenate(on_grids, axis=1)
@@ -226,9 +222,7 @@ def foot_events(walk) -> list[dict]:
         t0, side = step.t_start, stance_leg(step.index)
         other = "left" if side == "right" else "right"
         events.append({"time": t0 + step.plan.timings.t_ds, "side": other, "event": "toe_off"})
-        foot = step.stance_foot
-        if foot is None:
-            continue
+        foot = step.stance_foot      # the rules its own stance fixed: foot flat, heel-off
         if not foot.starts_standing:
             events.append({"time": t0, "side": side, "event": "heel_strike"})
         events.append({"time": t0 + foot.t_flat, "side": side, "event": "foot_flat"})

@@ -30,7 +30,7 @@ from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
 from .dynamics import heel_strike_map, stance_hip
 from .errors import ConvergenceError, Interrupted
-from .kinematics.virtual_leg import StanceFoot, hind_foot_at_rest
+from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
 
@@ -58,7 +58,7 @@ class Walk:
     """A simulated walk: the solved steps in order, and how the run ended (``status``: "ok",
     "failed" or "interrupted")."""
     spec: WalkSpec
-    steps: list = field(default_factory=list)
+    steps: list[StepResult] = field(default_factory=list)
     status: str = "ok"
     message: str = ""
     #: the walk's own wall time: compiling the solver kernels (``compile_s``) is left out, as the
@@ -76,6 +76,23 @@ class Walk:
     @property
     def duration(self) -> float:
         return sum(s.plan.timings.t_step for s in self.steps)
+
+    def stance_foot(self, k: int) -> StanceFoot:
+        """The virtual leg of step ``k``'s stance leg (§4.2) as far as the walk fixed it: the rules
+        its own stance fixed (``steps[k].stance_foot``), completed through their double support to
+        toe-off by the next step (its ``hind_foot``) where the walk has one."""
+        return self.steps[k + 1].hind_foot if k + 1 < len(self.steps) else self.steps[k].stance_foot
+
+    def stance_leg_frames(self, k: int) -> VirtualLegFrames | None:
+        """Step ``k``'s stance leg as a human leg from its heel strike to its toe-off, at the
+        stance's nodes and the next step's double support's; None for the walk's last step, whose
+        stance leg no double support completed."""
+        if k + 1 >= len(self.steps):
+            return None
+        step, following = self.steps[k], self.steps[k + 1]
+        t_after, hips_after = following.hind_samples
+        t = np.concatenate([step.subphase("stance").t, t_after[1:]])
+        return following.hind_foot.frames(t, np.vstack([step.stance_hips, hips_after[1:]]))
 
 
 def _walking_state(con, speed: float, theta2: float) -> np.ndarray:
@@ -120,7 +137,7 @@ def _first_input(controller: StepController, spec: WalkSpec) -> StepInput:
     attrs = spec.attributes
     if spec.start_from_rest:
         x0 = np.array([b.l1, 0.0, controller.gains.theta2_ref, 0.0, 0.0, 0.0])
-        return StepInput(x0, con.ankle_x, con.ankle_x, b.l1, 0.0)
+        return StepInput(x0, con.ankle_x, con.ankle_x, b.l1, 0.0, stance_standing=True)
     inp = StepInput(None, con.ankle_x, con.ankle_x - con.step_length, con.hip_y - b.l9,
                     _excursion(b, attrs, con.hip_y - b.l9, con.hip_y - b.l9))
     inp.x0 = periodic_start(controller, plan, inp)
@@ -193,14 +210,10 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
                 interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
                 plan = plans[k]
                 result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
+                # the step's stance leg is the next step's hind leg, whose double support completes it
                 next_inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
-                result.stance_foot = stance_leg_rules(spec, result)
-                if next_inp is not None:
-                    next_inp.hind_foot = result.stance_foot
                 # the step is complete: only now does the walk hold it (an interrupt above leaves
                 # the walk as it was after the previous step)
-                if walk.steps:   # this step's double support completed the previous stance leg
-                    walk.steps[-1].complete_stance_leg(result)
                 walk.steps.append(result)
                 inp = next_inp
                 if bar is not None:
@@ -321,21 +334,7 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     y_start = con.hip_y - b.l9
     y_end = next_plan.constraints.hip_y - b.l9
     excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
-    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion)
-
-
-def stance_leg_rules(spec: WalkSpec, result: StepResult) -> StanceFoot:
-    """The virtual leg's rules for the stance leg of ``result`` (§4.2): its heel-strike foot from
-    the first hip (flat for the first step from rest), its heel-off from the stance's hips; the next
-    step's double support completes it."""
-    body, attrs, t_step = spec.body, spec.attributes, result.plan.timings.t_step
-    if result.index == 0 and spec.start_from_rest:
-        foot = StanceFoot.standing(body, attrs, result.origin_x, t_step)
-    else:
-        stance = result.subphase("stance")
-        _, hip_velocity = stance_hip(body, stance.states[0], np.array([result.origin_x, body.l9]))
-        foot = StanceFoot.at_heel_strike(body, attrs, result.origin_x, result.stance_hips[0], t_step, hip_velocity)
-    return foot.find_heel_off(result.subphase("stance").t, result.stance_hips)
+    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion, hind_foot=result.stance_foot)
 
 
 def walk_spec(config, method: str | None = None) -> WalkSpec:

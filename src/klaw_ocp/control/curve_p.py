@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..body import Body
-from ..dynamics.kinematics import foot_points_float
+from ..dynamics.points import foot_points_float
 
 
 def root(f, a: float, b: float, xtol: float) -> float:
@@ -48,7 +48,7 @@ def root(f, a: float, b: float, xtol: float) -> float:
 def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -> tuple[np.ndarray, float]:
     """Ankle position and shank angle with the toe tip directly under the knee (end of swing1).
 
-    The toe's x less the knee's (:func:`~klaw_ocp.dynamics.kinematics.foot_points_float` with the
+    The toe's x less the knee's (:func:`~klaw_ocp.dynamics.points.foot_points_float` with the
     ankle l4 below the knee along the shank at φ) is A sin φ + B cos φ, with A = -l4 - r cos θ5 -
     l9 sin θ5 - l13 cos(θ5 + θ6) and B = r sin θ5 - l9 cos θ5 + l13 sin(θ5 + θ6), r the metatarsal
     head's reach ahead of the ankle: its root is φ = atan2(B, -A) (A < 0: the shank is the longest

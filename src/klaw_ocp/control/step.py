@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -18,13 +18,17 @@ from ..body import DYNAMIC_PARAMETER_NAMES, Body
 from ..dynamics import knee_lock_map, stance_hips
 from ..dynamics.evaluate import evaluate
 from ..errors import ConvergenceError
+from ..gait import StepPlan
+from ..kinematics.swing_foot import SwingFoot
+from ..kinematics.virtual_leg import StanceFoot
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
 from ..solvers.problem import mapped
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
-from .step_stages import DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, swing_context
+from .step_stages import (DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
+                          swing_context)
 from .swing_spec import swing_specs
 
 #: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
@@ -62,55 +66,46 @@ class StepInput:
     hind_ankle_x: float            # flat-foot ankle x of the hind (soon swinging) leg
     y_start: float                 # hip height above the stance ankle at heel strike
     excursion: float               # height of the hip's mid-step bump (0 for start/stop steps)
-    #: the hind leg's virtual leg (kinematics.virtual_leg.StanceFoot): its stance so far
-    hind_foot: object = None
+    #: the hind leg's virtual leg: its stance so far (the previous step's ``stance_foot``)
+    hind_foot: StanceFoot | None = None
+    #: the stance foot stands flat from the start, with no heel strike (a walk from rest's first step)
+    stance_standing: bool = False
 
 
-@dataclass
+@dataclass(frozen=True)
 class StepResult:
-    """A solved step: its subphase solutions plus the kinematic double support of the hind leg."""
+    """A solved step, built once when it is solved: its subphase solutions, the kinematic double
+    support of the hind leg and the virtual-leg rules of its own stance leg. The stance leg's
+    double support, and so its toe-off, belongs to the next step (its ``hind_foot``):
+    :meth:`klaw_ocp.walk.Walk.stance_foot` gives the leg completed."""
     index: int
     origin_x: float
     hind_ankle_x: float
     t_start: float
-    subphases: list
+    subphases: list[SubphaseSolution]
+    #: the hind leg's samples over the double support (``t``, ``theta3``, ``theta4``, ``pitch``)
     double_support: dict
+    #: curve P's numbers (:meth:`klaw_ocp.control.step_stages.CurveP.as_dict`)
     curve_p: dict
     final_stance_state: np.ndarray
     heel_clearance_min: float
-    plan: object = None
-    notes: list = field(default_factory=list)
+    plan: StepPlan
+    notes: list[str]
     #: the hip-height sinusoid the stance is guided towards (§4.2), in the stance ankle's frame:
     #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m
-    hip_reference: dict = field(default_factory=dict)
-    #: the hind leg's virtual leg, completed by this step's double support, and its samples there
-    #: (leg stance time, world hips)
-    hind_foot: object = None
-    hind_samples: tuple = ()
-    #: this step's stance leg (kinematics.virtual_leg.StanceFoot): the rules its own stance fixed
-    #: (heel strike, foot flat, heel-off), then completed by the next step's double support
-    #: (:meth:`complete_stance_leg`, whose samples go to ``stance_samples``)
-    stance_foot: object = None
-    stance_samples: tuple = ()
+    hip_reference: dict
+    #: the hind leg's virtual leg, completed by this step's double support (the previous stance
+    #: leg's rules with their toe-off), and its samples there: (leg stance times, world hips (n, 2))
+    hind_foot: StanceFoot
+    hind_samples: tuple[np.ndarray, np.ndarray]
+    #: this step's stance leg: the rules its own stance fixed (heel strike, foot flat, heel-off;
+    #: :func:`klaw_ocp.control.step_stages.stance_leg_rules`); the next step's double support
+    #: completes them into that step's ``hind_foot``
+    stance_foot: StanceFoot
     #: the world hip at every stance node (m)
-    stance_hips: np.ndarray = None
-    #: the swing foot's angle schedule (kinematics.swing_foot.SwingFoot), step-local times
-    swing_foot: object = None
-
-    def complete_stance_leg(self, following: "StepResult") -> None:
-        """The next step's double support finished this stance leg: keep its rules and samples."""
-        self.stance_foot = following.hind_foot
-        self.stance_samples = following.hind_samples
-
-    def stance_leg_frames(self):
-        """This step's stance leg as a human leg (kinematics.virtual_leg.VirtualLegFrames) from its
-        heel strike to its toe-off, at the stance's nodes and the next double support's; None until
-        the next step has completed it."""
-        if self.stance_foot is None or not self.stance_foot.complete:
-            return None
-        t_after, hips_after = self.stance_samples
-        t = np.concatenate([self.subphase("stance").t, t_after[1:]])
-        return self.stance_foot.frames(t, np.vstack([self.stance_hips, hips_after[1:]]))
+    stance_hips: np.ndarray
+    #: the swing foot's angle schedule, step-local times
+    swing_foot: SwingFoot
 
     def subphase(self, name: str) -> SubphaseSolution:
         return next(s for s in self.subphases if s.name == name)
@@ -220,14 +215,15 @@ class StepController:
 
     # -- the whole step ------------------------------------------------------------------------
     def solve_step(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StepResult:
-        """One step in its stages: the stance (solved), the hind leg's double support to toe-off,
-        curve P and the swing foot, the swing context, the three swings (solved), the heel's
-        clearance before it strikes."""
+        """One step in its stages: the stance (solved), the stance leg's own virtual-leg rules, the
+        hind leg's double support to toe-off, curve P and the swing foot, the swing context, the
+        three swings (solved), the heel's clearance before it strikes."""
         b, t = self.body, plan.timings
         stance = self.solve_stance(plan, inp, index, at_rest)
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
+        stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing)
         ds = hind_leg_double_support(self.attrs, plan, stance, hips, hip_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
         curve = plan_curve_p(b, self.attrs, plan, ds, hips[node_at(stance.t, t1)])
@@ -243,8 +239,8 @@ class StepController:
                           plan=plan, notes=lock_rule_notes(stance, b.l1),
                           hip_reference={"y_start": inp.y_start, "y_end": stance_ctx["y_end"],
                                          "excursion": inp.excursion},
-                          hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_hips=hips,
-                          swing_foot=curve.swing_foot)
+                          hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
+                          stance_hips=hips, swing_foot=curve.swing_foot)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
                      stance_events, t_toe_off: float) -> list[SubphaseSolution]:

@@ -1,6 +1,9 @@
-"""The kinematic stages of a step between its stance and its swings (section 4.3), each a plain
-function of what the stage before it handed on:
+"""The kinematic stages of a step between its stance and its swings (sections 4.2, 4.3), each a
+plain function of what the stage before it handed on:
 
+0. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
+   its heel-strike foot and its heel-off; the next step's double support completes them (stage 1
+   of that step);
 1. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
    to toe-off, where swing1 starts from its posture ("the continuing stance phase of the hind leg
    is completed kinematically", §3);
@@ -20,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..body import Body
+from ..dynamics import stance_hip
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
@@ -93,6 +97,21 @@ class CurveP:
 def node_at(t_nodes: np.ndarray, time: float) -> int:
     """The grid node nearest ``time`` (the subphase grids put a node on every breakpoint)."""
     return int(np.argmin(np.abs(t_nodes - time)))
+
+
+def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
+                     standing: bool = False) -> StanceFoot:
+    """The virtual leg's rules for the stance leg of a step (§4.2), from its solved ``stance`` and
+    the world hips at its nodes ``hips``: its heel-strike foot from the first hip (flat from the
+    start where it is ``standing``: the first step of a walk from rest), its heel-off from the
+    stance's hips. The next step's double support completes them (:func:`hind_leg_double_support`)."""
+    t_step = plan.timings.t_step
+    if standing:
+        foot = StanceFoot.standing(body, attrs, origin_x, t_step)
+    else:
+        _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
+        foot = StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity)
+    return foot.find_heel_off(stance.t, hips)
 
 
 def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.ndarray,

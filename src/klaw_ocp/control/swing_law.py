@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ..dynamics.kinematics import foot_points_sx
+from ..dynamics.points import foot_points_sx
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from ..dynamics.swing import swing_accelerations_sx, swing_points
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles

@@ -6,7 +6,7 @@
   loop (held at 0 unless the toe would not clear the ground); the knee reaches full extension
   (theta4 = 0) at t2. Path functions: toe height, kept above the toe-clearance attribute, and
   heel height, reported only (no lower bound: the straight leg of short steps cannot keep the
-  scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, kinematics/swing_feet.py).
+  scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, body_motion/swing_foot_guard.py).
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
   t_swing, where the heel lands on the ground (eq. 3 geometry). Path function: the heel's
   height (reported as the step's heel clearance, not constrained: the one unknown is fixed by

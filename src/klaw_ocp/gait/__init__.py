@@ -2,7 +2,7 @@
 timings (eq. 2), step symmetry (eq. 3), locomotion attributes, and the per-step plan of a walk."""
 from .attributes import ATTRIBUTES, AttributeSpec, LocomotionAttributes
 from .parameters import LocomotionParameters, complete_parameters
-from .plan import StepPlan, closing_step, plan_steps
+from .plan import StepPlan, closing_step, plan_steps, stance_leg
 from .symmetry import StepConstraints, landing_heel, step_constraints
 from .timings import StateTimings, state_phase_timings
 
@@ -11,5 +11,5 @@ __all__ = [
     "LocomotionParameters", "complete_parameters",
     "StateTimings", "state_phase_timings",
     "StepConstraints", "step_constraints", "landing_heel",
-    "StepPlan", "plan_steps", "closing_step",
+    "StepPlan", "plan_steps", "closing_step", "stance_leg",
 ]

@@ -46,6 +46,11 @@ MAX_STEPS = 1000
 MAX_WALK_S = 600.0
 
 
+def stance_leg(index: int) -> str:
+    """Which leg is the stance leg of step ``index``: step 0's is the right leg, then they alternate."""
+    return "right" if index % 2 == 0 else "left"
+
+
 @dataclass(frozen=True)
 class StepPlan:
     """Everything the low level needs to execute step ``index`` (the step constraints).

@@ -34,7 +34,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
-from ..kinematics.skeleton import SIDES, Dimensions
+from ..body_motion.skeleton import SIDES, Dimensions
 from .body_plots import CHAINS, chain_points, has_angles, skeleton_at
 from .gait_diagram import gait_events
 from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, PaletteWriter, StaticText

@@ -5,7 +5,7 @@ its heel strikes and toe-offs (:func:`~klaw_ocp.io.gait_diagram.gait_events`):
   normalised gait cycle (0-100 % from a heel strike of that leg to its next), the way gait
   laboratories show them: every cycle thin, their mean bold, the mean toe-off marked.
 - ``body.png``: the skeleton at the heel strikes that open the steps, drawn side on from the
-  forward kinematics of the angles (:func:`klaw_ocp.kinematics.skeleton.forward_kinematics`), with
+  forward kinematics of the angles (:func:`klaw_ocp.body_motion.skeleton.forward_kinematics`), with
   the dynamic model of ``legs.png`` over it (the new stance leg's telescope, the hind leg with the
   virtual leg's angles, the upper body), so that the two can be seen to agree. (At the walk's last
   heel strike the model would show the leg finishing its stance as a telescope, which has no knee
@@ -21,7 +21,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 from matplotlib.ticker import MultipleLocator
 
-from ..kinematics.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
+from ..body_motion.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
 from .gait_diagram import gait_events
 from .plot_style import FONT_PT, LEG_COLOURS, add_axes_in, new_figure, style_axes
 from .strobe import TRUNK_COLOUR, draw_ground, draw_posture

@@ -1,7 +1,7 @@
 """``walk.bvh``: the 37-joint skeleton's motion as a Biovision Hierarchy file, and a small reader.
 
 The writer turns angles.csv's table (time, the root position in m, the 56 angles in degrees,
-docs/body.md) and the body (the rest offsets, :mod:`klaw_ocp.kinematics.skeleton`) into a BVH file
+docs/body.md) and the body (the rest offsets, :mod:`klaw_ocp.body_motion.skeleton`) into a BVH file
 that Blender's bundled importer (``io_anim_bvh``) reads with its default axes (docs/animation.md).
 The reader (:func:`read_bvh`) parses such a file back and does its forward kinematics, so that
 tests can check that the file reproduces the skeleton.
@@ -41,8 +41,8 @@ from pathlib import Path
 import numpy as np
 
 from ..body import Body
-from ..kinematics.skeleton import (ANGLE_NAMES, JOINTS, end_site_offsets, rest_offsets,
-                                   rest_root_position)
+from ..body_motion.skeleton import (ANGLE_NAMES, JOINTS, end_site_offsets, rest_offsets,
+                                    rest_root_position)
 from .fixed_text import fixed_decimals_rows
 from .writers import atomic_write_text
 
@@ -83,7 +83,7 @@ def _table_and_body(motion, body) -> tuple[dict, Body]:
             raise ValueError(f"motion: the run {motion.name!r} has no angles (a results folder written "
                              f"before angles.csv was)")
         table, body = motion.angles, motion.body_model() if body is None else body
-    elif hasattr(motion, "table") and callable(motion.table):     # kinematics.body_motion.BodyMotion
+    elif hasattr(motion, "table") and callable(motion.table):     # body_motion.BodyMotion
         table = motion.table()
     elif isinstance(motion, dict):
         table = motion
@@ -176,7 +176,7 @@ def bvh_text(motion, body=None, fps: float | None = None) -> str:
     """The BVH file of ``motion`` as text.
 
     ``motion``: a :class:`~klaw_ocp.io.run_data.RunData` (its ``angles``; its summary's body
-    unless ``body`` is given), a :class:`~klaw_ocp.kinematics.body_motion.BodyMotion`, or
+    unless ``body`` is given), a :class:`~klaw_ocp.body_motion.BodyMotion`, or
     angles.csv's columns as a dict (time in s, root_x/y/z in m, the 56 angles in degrees).
     ``body``: a :class:`~klaw_ocp.body.Body` or summary.json's body dict. ``fps``: the frame rate
     (``output.fps``); None takes it from the frame times. Frames must be equally spaced.

@@ -1,7 +1,7 @@
 """``walk.mot``: the body's motion as OpenSim coordinates, for the gait2392 and gait10dof18musc
 models (issue #23; docs/opensim.md says how to load it and why each rule holds).
 
-Input: the columns of angles.csv (:meth:`klaw_ocp.kinematics.body_motion.BodyMotion.table`, or
+Input: the columns of angles.csv (:meth:`klaw_ocp.body_motion.BodyMotion.table`, or
 ``RunData.angles`` read back from a results folder): ``time`` (s), ``root_x/y/z`` (the pelvis
 centre, m) and the 56 angles in degrees. Output: OpenSim's motion (Storage) format, version 1,
 angles in degrees, tab separated, one row per frame, the 19 coordinates of :data:`COORDINATES`.
@@ -39,8 +39,8 @@ import numpy as np
 
 from ..body import Body
 from ..errors import one_line
-from ..kinematics.skeleton import (ANGLE_NAMES, LUMBAR, THORACIC, frames_array, joint_index,
-                                   local_rotations, rest_root_position, zxy_angles)
+from ..body_motion.skeleton import (ANGLE_NAMES, LUMBAR, THORACIC, frames_array, joint_index,
+                                    local_rotations, rest_root_position, zxy_angles)
 from .fixed_text import fixed_decimals_rows
 from .writers import atomic_write_bytes
 

@@ -9,7 +9,7 @@ solving anything. Nothing here imports a solver.
 ``table`` maps every column of ``dynamics.csv`` (:data:`klaw_ocp.results.COLUMNS`) to an array
 (``subphase`` an array of str, ``step`` of int); ``summary`` is the dict of ``summary.json``
 (:func:`klaw_ocp.results.walk_summary`); ``angles`` every column of ``angles.csv`` (the body at
-every frame: time, root, the 56 angles in degrees, :meth:`klaw_ocp.kinematics.body_motion.BodyMotion.table`),
+every frame: time, root, the 56 angles in degrees, :meth:`klaw_ocp.body_motion.BodyMotion.table`),
 or None for a results folder written before the body was.
 """
 from __future__ import annotations
@@ -49,7 +49,7 @@ class RunData:
         """The results of a walk in memory (``table``/``summary``: when the caller has them
         already), the body's angles at ``fps`` frames per second (default: output.fps's)."""
         from ..config import DEFAULT_FPS
-        from ..kinematics.body_motion import ANGLES_COLUMNS, body_motion
+        from ..body_motion import ANGLES_COLUMNS, body_motion
         from ..results import hip_offsets, walk_summary, walk_table
         # the hips of every node, once for the table and the summary
         offsets = hip_offsets(walk) if walk.steps and (table is None or summary is None) else None

@@ -5,7 +5,7 @@ writes them step by step through :mod:`klaw_ocp.io.run_writer`, the same bytes.
 - ``dynamics.csv``: :func:`klaw_ocp.results.walk_table`, one row per time sample.
 - ``events.csv``: :func:`events_csv`, the foot events (heel strike, foot flat, heel-off, toe-off).
 - ``angles.csv``: :func:`angles_csv`, the body at every frame: time, root, the 56 angles in degrees
-  (:mod:`klaw_ocp.kinematics.body_motion`, docs/body.md).
+  (:mod:`klaw_ocp.body_motion`, docs/body.md).
 """
 from __future__ import annotations
 

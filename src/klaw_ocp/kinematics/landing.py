@@ -14,9 +14,9 @@ knee, so that thigh, knee and ankle start at most LANDING_JOINT_RATE. Where the 
 already manages (the natural walk, slower walks) it lands straight, as before.
 
 A bent knee brings the ankle nearer the hip, so the foot lands a little more toe-up about the same
-heel point (the planned one): the swing leg bends into that posture over the end of its swing
-(:mod:`.swing_legs`). The dynamics are unchanged: their swing leg lands straight, and the stance
-leg's hip is the simulated one throughout.
+heel point (the planned one): the body's swing leg bends into that posture over the end of its
+swing (:mod:`klaw_ocp.body_motion.swing_legs`). The dynamics are unchanged: their swing leg lands
+straight, and the stance leg's hip is the simulated one throughout.
 
 Frames: world x forward, y up, ground y = 0; pitch clockwise (heel-up), negative toe-up.
 """

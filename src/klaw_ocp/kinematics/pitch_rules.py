@@ -1,7 +1,8 @@
 """The foot's pitch through one stance (§4.2's three periods), as functions of the stance time: the
 rocker about the heel after heel strike, single support's heel rise, and the push-off to toe-off.
 :class:`.virtual_leg.StanceFoot` holds the numbers of one stance; :func:`rule_pitch` takes them
-as numbers or one per sample, so that :mod:`.stance_legs` evaluates many stances at once.
+as numbers or one per sample, so that the body (:mod:`klaw_ocp.body_motion.stance_legs`) evaluates
+many stances at once.
 
 Pitch ``p`` is the foot's heel-up rotation (clockwise, rad), negative while it rotates toe-up about
 the heel; times are the leg's stance time, 0 at its heel strike.

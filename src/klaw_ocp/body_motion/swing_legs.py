@@ -1,33 +1,35 @@
 """The body's swing leg (§4.3, principle 2): the dynamics' thigh and knee, hung from the leg's own
-hip in its plane, with the kinematic swing foot (:mod:`.swing_foot`) and its ground guard.
+hip in its plane, with the kinematic swing foot (:mod:`klaw_ocp.kinematics.swing_foot`) and its
+ground guard (:mod:`.swing_foot_guard`).
 
 The planar model's swing leg hangs from the simulated hip; the body's swing leg hangs from its own
-hip in its own plane (:class:`.body_motion.LegPlanes`), which the lateral displacement puts up to
+hip in its own plane (:class:`.motion.LegPlanes`), which the lateral displacement puts up to
 a few millimetres away from it. Near a straight knee a millimetre of hip-to-ankle distance is
 degrees of knee, so the body keeps the dynamics' hip-to-ankle *distance* (the dynamic knee
 angle), pointed from its own hip at the model's ankle: the ankle then moves by that millimetre
 along the leg, and the knee the body shows is the dynamic one. At both ends the leg meets a
 virtual leg (:func:`_end_offsets`), whose knee is the inverse kinematics of the leg's own hip and
 the planted foot: at toe-off the body's leg starts at the virtual leg's ankle and foot pitch as
-the body shows them (:func:`.body_motion.toe_off_feet`) and blends into the model's ankle, the
+the body shows them (:func:`.motion.toe_off_feet`) and blends into the model's ankle, the
 dynamic distance and the scheduled foot over the first TOE_OFF_BLEND of swing1; over swing3 it
-blends into the next stance's heel-strike posture (its knee flexed where :mod:`.landing` says,
-its foot then a little more toe-up), the heel on the planned point (the two hips coincide there:
-no lateral displacement). Smoothsteps both, so no angle jumps.
+blends into the next stance's heel-strike posture (its knee flexed where
+:mod:`klaw_ocp.kinematics.landing` says, its foot then a little more toe-up), the heel on the
+planned point (the two hips coincide there: no lateral displacement). Smoothsteps both, so no
+angle jumps.
 
-The foot (:meth:`.swing_foot.SwingFoot.lifted_foot`; every step's in one pass, :mod:`.swing_feet`):
-the schedule, turned where it would enter the ground and, where the leg is too low for any foot,
-lifted with the ankle by a bend of the knee. The guard sees the body's own leg on its grid, so
+The foot (:func:`.swing_foot_guard.lifted_foot`; every step's in one pass,
+:func:`.swing_foot_guard.lifted_feet`): the schedule, turned where it would enter the ground and,
+where the leg is too low for any foot, lifted with the ankle by a bend of the knee. The guard sees the body's own leg on its grid, so
 what it keeps above the ground is what the skeleton shows.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.kinematics import foot_points_arrays
-from .leg_geometry import clamp, leg_fk, leg_ik, smoothstep
-from .swing_feet import lifted_feet
-from .swing_foot import SCHEDULE_FIELDS, schedule_angles
+from ..dynamics.points import foot_points_arrays
+from ..kinematics.leg_geometry import clamp, leg_fk, leg_ik, smoothstep
+from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
+from .swing_foot_guard import guard_grid, lifted_feet
 from .walk_samples import swing_curves
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
@@ -82,11 +84,11 @@ def _end_offsets(walk, swing, steps, t, simulated_hip, ankles, pitches) -> tuple
 
 def _landings(walk, swing, simulated_hip) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_end_offsets` at each step's heel strike (the simulated hips there (steps - 1, 2)):
-    the swing leg lands as the next stance's virtual leg starts (:mod:`.landing`: its knee may be
-    flexed, its foot then a little more toe-up about the same heel point). The walk's last step has
-    no next stance."""
+    the swing leg lands as the next stance's virtual leg starts (:mod:`klaw_ocp.kinematics.landing`:
+    its knee may be flexed, its foot then a little more toe-up about the same heel point). The
+    walk's last step has no next stance."""
     steps = walk.steps
-    lands = [s.stance_foot for s in steps[1:]]
+    lands = [walk.stance_foot(k) for k in range(1, len(steps))]
     ankles = np.vstack([f.foot.ankle_at([f.rocker_pitch], f.meta_off_theta6) for f in lands]) if lands else np.zeros((0, 2))
     return _end_offsets(walk, swing, np.arange(len(lands)), _heel_strikes(walk), simulated_hip, ankles,
                         np.array([f.rocker_pitch for f in lands]))
@@ -103,14 +105,14 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     ``hips_at(step, tau)`` gives the simulated hip and the swinging leg's own hip in its plane,
     (n, 2) each, at any such samples (the frames', and each step's guard grid);
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
-    at its toe-off as the body shows it (:func:`.body_motion.toe_off_feet`), which the swing leg
+    at its toe-off as the body shows it (:func:`.motion.toe_off_feet`), which the swing leg
     starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already."""
     body, steps = walk.spec.body, walk.steps
     swing = swing_curves(walk)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
     swinging, counts = np.unique(step, return_counts=True)
-    grids = [steps[k].swing_foot.guard_grid() for k in swinging]
+    grids = [guard_grid(steps[k].swing_foot) for k in swinging]
     grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
     # the hips at every toe-off, every heel strike and on the grids, in one pass
     every, t_to, t_hs = np.arange(len(steps)), np.array([s.swing_foot.t_toe_off for s in steps]), _heel_strikes(walk)

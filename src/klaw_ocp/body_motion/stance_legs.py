@@ -1,15 +1,16 @@
-"""The virtual legs (:mod:`.virtual_leg`) of many stances of one walk evaluated together: the body
-(:mod:`.body_motion`) needs every stance of a walk at its frames, and one :meth:`StanceFoot.frames`
-call per stance costs mostly its fixed overhead (about 0.7 ms, with a few dozen frames each)."""
+"""The virtual legs (:mod:`klaw_ocp.kinematics.virtual_leg`) of many stances of one walk evaluated
+together: the body (:mod:`.motion`) needs every stance of a walk at its frames, and one
+:meth:`StanceFoot.frames` call per stance costs mostly its fixed overhead (about 0.7 ms, with a few
+dozen frames each)."""
 from __future__ import annotations
 
 from dataclasses import replace
 
 import numpy as np
 
-from .leg_geometry import FlatFoot
-from .pitch_rules import RULE_FIELDS, rule_pitch
-from .virtual_leg import VirtualLegFrames, leg_frames
+from ..kinematics.leg_geometry import FlatFoot
+from ..kinematics.pitch_rules import RULE_FIELDS, rule_pitch
+from ..kinematics.virtual_leg import VirtualLegFrames, leg_frames
 
 
 def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:

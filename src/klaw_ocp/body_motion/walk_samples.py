@@ -1,5 +1,5 @@
 """The simulated walk between its stored nodes: the stance and swing states at any walk times (the
-body's frames, :mod:`.body_motion`), read from a :class:`~klaw_ocp.walk.Walk`'s steps.
+body's frames, :mod:`.motion`), read from a :class:`~klaw_ocp.walk.Walk`'s steps.
 
 The solvers store each subphase's states at its grid nodes only (20 intervals a subphase). Between
 them the states are cubic Hermite interpolated with the stored rates (w, θ1, θ2 with ẇ, θ̇1, θ̇2;

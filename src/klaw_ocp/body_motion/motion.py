@@ -1,9 +1,10 @@
 """The human body on the simulated walk: the 37-joint skeleton's root and 56 angles at every frame
 (section 4, principles 2 and 3; docs/body.md).
 
-- Legs (principle 2): in stance the virtual leg (§4.2, :mod:`.virtual_leg`) on the simulated hip,
-  from heel strike through the next step's double support to toe-off; in swing the dynamics' θ3,
-  θ4 with the kinematic swing foot (§4.3, :mod:`.swing_foot`).
+- Legs (principle 2): in stance the virtual leg (§4.2, :mod:`klaw_ocp.kinematics.virtual_leg`) on
+  the simulated hip, from heel strike through the next step's double support to toe-off
+  (:meth:`klaw_ocp.walk.Walk.stance_foot`); in swing the dynamics' θ3, θ4 with the kinematic swing
+  foot (§4.3, :mod:`klaw_ocp.kinematics.swing_foot`) kept out of the ground (:mod:`.swing_foot_guard`).
 - The planar model in 3D: the pelvis centre weaves sideways (the determinant "lateral
   displacement", :func:`.upper_body.lateral_displacement`), each foot walks along its own ground
   line, and each leg moves in the plane through its ground line and its hip (:class:`LegPlanes`).
@@ -20,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..results import stance_leg
+from ..gait.plan import stance_leg
+from ..kinematics.leg_geometry import leg_ik
 from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
 from .skeleton import ANGLE_NAMES, SIDES
-from .leg_geometry import leg_ik
 from .stance_legs import stance_frames
 from .swing_legs import swing_legs
 from .upper_body import StepWindow, lateral_displacement, upper_body_motion
@@ -151,7 +152,7 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
     t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
     in_double_support = samples.tau <= t_ds[samples.step]
     # each stance foot with the step it lands in (step 0's hind foot stood before the walk began)
-    feet = [(-1, walk.steps[0].hind_foot)] + [(k, s.stance_foot) for k, s in enumerate(walk.steps)]
+    feet = [(-1, walk.steps[0].hind_foot)] + [(k, walk.stance_foot(k)) for k in range(len(walk.steps))]
     sides, rows, t_leg = [], [], []
     for k, foot in feet:
         sides.append(stance_leg(k) if k >= 0 else _OTHER[stance_leg(0)])

@@ -1,4 +1,6 @@
-"""Forward kinematics of the dynamic models and the kinematic foot (sections 2.3, 3, 4.3; figures 2, 5-7).
+"""The models' points: forward kinematics of the dynamic models and the kinematic foot (sections
+2.3, 3, 4.3; figures 2, 5-7): the foot's heel, metatarsal head and toe tip, the swing leg's
+points, the stance hip, the upper body's centre of mass.
 
 Serves ground-clearance constraints, plots and the animation. Positions are in the world frame
 (x forward, y up, metres); the models' own conventions are those of :mod:`.stance` and

@@ -1,0 +1,273 @@
+"""The swing foot's ground guard: the foot the body shows after the walk (§4.3's kinematic foot,
+:class:`klaw_ocp.kinematics.swing_foot.SwingFoot`, kept out of the ground), for every step at once.
+
+Where the schedule would put the toe or the heel into the ground, the foot the body shows is
+turned, sample by sample, by the least angle that keeps both on or above it
+(:func:`grounded_angles`): in swing1, where the ankle follows curve P and the foot plays no part
+in the dynamics, and wherever the straight leg of swing2 and swing3 carries the ankle low. Where
+the leg is too low for any foot, the ankle is lifted by a bend of the knee (:func:`ankle_lift`,
+:func:`lifted_foot`). The solvers never see this guard: it runs on the solved walk, for the body's
+swing legs (:mod:`.swing_legs`) and for the summary's swing-foot clearance
+(:func:`klaw_ocp.results.swing_foot_clearances`).
+
+A step's foot costs about 90 small numpy operations, most of their time numpy's fixed overhead on
+a grid of about 200 points; the walk has one per step, and the body and the summary each ask for
+all of them. So the grids are concatenated (:func:`lifted_feet`, :func:`grounded_feet`): the
+elementwise parts (the schedule, the ground limits, the lowest sole point, the knee's bend) run
+once on the whole, and the two operations that run along a step's grid, the running maxima of the
+rate-limited turn and of the cone envelope, run on one row per step of a padded array (the padding
+is -inf, which a running maximum passes over), so no maximum crosses from one step into the next.
+Only the interpolation from each grid to the step's own times stays a call per step (np.interp).
+:func:`lifted_foot`, :func:`grounded_angles_on_grid`, :func:`rate_limited_turn` and
+:func:`ankle_lift` are the one-step forms.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..kinematics.leg_geometry import clamp, knee_flexion_for_reach, reach_for_knee_flexion
+from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot, schedule_angles
+
+#: the fastest the ground guard turns the ankle away from its schedule (rad/s; people's swing ankle
+#: moves at up to about 200-300°/s) and the grid it is computed on (s)
+GUARD_RATE = math.radians(400)
+GUARD_GRID = 0.002
+
+
+def guard_grid(foot: SwingFoot) -> np.ndarray:
+    """The swing's times at which :func:`grounded_angles` asks for the leg (GUARD_GRID apart)."""
+    n = max(int(math.ceil((foot.t_heel_strike - foot.t_toe_off) / GUARD_GRID)), 1) + 1
+    return np.linspace(foot.t_toe_off, foot.t_heel_strike, n)
+
+
+def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray, np.ndarray]:
+    """Heights above the ground (m) of the heel and the toe tip of a foot whose ankle is at height
+    ``ankle_y`` (the foot of :func:`klaw_ocp.dynamics.foot_points_sx`, vectorised)."""
+    alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5     # the backward sole direction
+    reach = body.metatarsal_reach
+    heel = ankle_y + body.l8 * np.sin(alpha) + body.l9 * np.cos(alpha)
+    toe = ankle_y - reach * np.sin(alpha) + body.l9 * np.cos(alpha) - body.l13 * np.sin(alpha + theta6)
+    return heel, toe
+
+
+def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
+    # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
+    # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
+    reach = body.metatarsal_reach
+    heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
+    toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
+    toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
+    lower, upper = np.full(theta5.shape, -np.inf), np.full(theta5.shape, np.inf)
+    fits = np.ones(theta5.shape, bool)
+    for radius, phase in (heel, toe):
+        centre = math.pi / 2 - phase
+        centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
+        half = np.arccos(clamp(-ankle_y / radius, -1.0, 1.0))
+        fits &= np.abs(math.pi - centre) <= half
+        # a point nearer the ankle than the ankle's height is above the ground at every angle:
+        # no limit (its arc's edges, π either side, are where it points straight down)
+        free = ankle_y >= radius
+        lower = np.where(free, lower, np.maximum(lower, centre - half))
+        upper = np.where(free, upper, np.minimum(upper, centre + half))
+    to_theta5 = shank - math.pi / 2
+    level = math.pi + to_theta5
+    return np.where(fits, clamp(theta5, lower + to_theta5, upper + to_theta5), level), theta6
+
+
+def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
+    """Height (m) of the lowest of the heel, the first metatarsal head and the toe tip of the foot
+    of :func:`sole_heights` (the metatarsal head is the lowest where the toes are bent up)."""
+    heel, toe = sole_heights(body, ankle_y, shank_angle, theta5, theta6)
+    alpha = math.pi / 2 - np.asarray(shank_angle, float) + theta5
+    metatarsal = ankle_y - body.metatarsal_reach * np.sin(alpha) + body.l9 * np.cos(alpha)
+    return np.minimum(np.minimum(heel, toe), metatarsal)
+
+
+def ground_limits(body, foot: SwingFoot, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
+    """θ5 (rad) of the schedule ``foot`` at times ``t`` clipped to the angles that keep both the
+    toe and the heel on or above the ground (in closed form), with the swing leg's ankle height
+    ``ankle_y`` and shank angle θ3 + θ4 (each (n,)); and the ground-limit-free schedule's θ6. Of
+    those angles, the range around the level sole, which fits whenever the ankle is at least l9 up
+    (the two ground limits can leave two ranges; this one moves continuously with the leg). Below
+    l9 no foot fits, and the sole is level, the least deep."""
+    t = np.asarray(t, float)
+    return _ground_clip(body, *foot.angles(t), np.broadcast_to(ankle_y, t.shape),
+                        np.broadcast_to(shank_angle, t.shape))
+
+
+class _Grids:
+    """Concatenated per-step grids: each step's first and last value broadcast over its points,
+    and running maxima that restart at every step."""
+
+    def __init__(self, grids: list):
+        self.lengths = np.array([len(g) for g in grids])
+        self.ends = np.cumsum(self.lengths)
+        self.starts = self.ends - self.lengths
+        self.t = np.concatenate(grids)
+        self.row = np.repeat(np.arange(len(grids)), self.lengths)
+        self.column = np.arange(len(self.t)) - np.repeat(self.starts, self.lengths)
+        self.shape = (len(grids), int(self.lengths.max()))
+        self.since = self.t - self.first(self.t)            # grid - grid[0], step by step
+        self.duration = self.last(self.since)               # since[-1]
+
+    def first(self, values):
+        return np.repeat(values[self.starts], self.lengths)
+
+    def last(self, values):
+        return np.repeat(values[self.ends - 1], self.lengths)
+
+    def running_max(self, values, backwards=False):
+        """np.maximum.accumulate of each step's part (of its reverse, reversed back: ``backwards``)."""
+        padded = np.full(self.shape, -np.inf)
+        padded[self.row, self.column] = values
+        if backwards:
+            return np.maximum.accumulate(padded[:, ::-1], axis=1)[:, ::-1][self.row, self.column]
+        return np.maximum.accumulate(padded, axis=1)[self.row, self.column]
+
+    def envelope(self, part, slope):
+        """max_j(part_j - slope |t_i - t_j|) on each step's grid, as the larger of the running maxima
+        from the left and from the right (O(n), not an n x n matrix)."""
+        left = self.running_max(part + slope) - slope
+        right = self.running_max(part - slope, backwards=True) + slope
+        return np.maximum(left, right)
+
+
+def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE, capped_at_ends=False):
+    """The least function at least ``required`` where that is positive and at most it where
+    negative that changes by at most ``rate``, on every step's grid: max_j(part_j - rate |t_i -
+    t_j|) for each sign's part (:meth:`_Grids.envelope`); ``capped_at_ends``: also 0 at each
+    grid's ends, rising from them at ``rate`` (:func:`rate_limited_turn`)."""
+    out = np.zeros(len(grids.t))
+    slope = rate * grids.since
+    ends = rate * np.minimum(grids.since, grids.duration - grids.since) if capped_at_ends else np.inf
+    for sign in (1.0, -1.0):
+        out += sign * np.minimum(grids.envelope(np.maximum(sign * required, 0.0), slope), ends)
+    return out
+
+
+def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
+    """:func:`rate_limited_turn` of every step at once."""
+    return _cone_envelope(grids, required, rate, capped_at_ends=True)
+
+
+def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
+    """:func:`ankle_lift` of every step at once."""
+    need = np.maximum(-lowest, 0.0)
+    dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
+    flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
+    wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
+    bend = _rate_limited_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0))
+    reach = reach_for_knee_flexion(body, flexion + bend)
+    # (>= 0: where the bend is a round-off above 0, the distance's round-off could lower the ankle)
+    return np.where(bend > 0, np.maximum(drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0), 0.0)
+
+
+def _turned(body, feet: list, on: _Grids, ankle_y, shank):
+    """The schedule of every step on its grid, and the turn of the ground guard (rad) there:
+    (scheduled θ5, θ6, turn), concatenated in order."""
+    schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
+    scheduled, theta6 = schedule_angles(on.t, schedule, clamp)
+    required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
+    turn = _rate_limited_turn(on, required)
+    # the rate-limited turn lags where a large requirement falls off quickly (the schedule itself
+    # moving towards the level sole), and so can overshoot into the other limit: the toe then goes
+    # down where the heel needed the turn; clipped to both limits again, the clip rate-limited too
+    back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
+    # (capped at the ends too: there the foot is the stance foot's, on the ground by construction)
+    return scheduled, theta6, turn + _cone_envelope(on, back, capped_at_ends=True)
+
+
+def _at_times(feet: list, times: list, on: _Grids, *on_grid):
+    """θ5 and θ6 of the schedules at each step's own ``times`` (concatenated in order), and each
+    of ``on_grid`` (values on the grids) interpolated linearly to those times."""
+    counts = [len(t) for t in times]
+    at = {name: np.repeat([getattr(f, name) for f in feet], counts) for name in SCHEDULE_FIELDS}
+    theta5, theta6 = schedule_angles(np.concatenate(times), at, clamp)
+    out = [np.empty(len(theta5)) for _ in on_grid]
+    for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
+        grid, mine = on.t[start:end], slice(stop - len(t), stop)
+        for o, values in zip(out, on_grid):
+            o[mine] = np.interp(t, grid, values[start:end])
+    return theta5, theta6, out
+
+
+def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`grounded_angles_on_grid` of the steps' swing feet ``feet``, each
+    at its own step-local times ``times[k]`` with its guard grid ``grids[k]``; ``ankle_y`` and
+    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 at the times."""
+    on = _Grids(grids)
+    _, _, turn = _turned(body, feet, on, ankle_y, shank)
+    theta5, theta6, (turn_t,) = _at_times(feet, times, on, turn)
+    return theta5 + turn_t, theta6
+
+
+def lifted_feet(body, feet: list, times: list, grids: list, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`lifted_foot` of the steps' swing feet ``feet``, each at its own
+    step-local times ``times[k]`` with its guard grid ``grids[k]``; ``hip``, ``ankle`` (m, 2) and
+    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 and the
+    ankle's lift at the times, concatenated in order."""
+    on = _Grids(grids)
+    scheduled, theta6, turn = _turned(body, feet, on, ankle[:, 1], shank)
+    lowest = lowest_sole_point(body, ankle[:, 1], shank, scheduled + turn, theta6)
+    lift = _ankle_lift(body, on, hip, ankle, lowest)
+    theta5_t, theta6_t, (turn_t, lift_t) = _at_times(feet, times, on, turn, lift)
+    return theta5_t + turn_t, theta6_t, lift_t
+
+
+def grounded_angles(body, foot: SwingFoot, t, leg) -> tuple[np.ndarray, np.ndarray]:
+    """θ5 and θ6 of the foot the body shows at step-local times ``t`` in the swing (n,), for
+    the schedule ``foot`` and the swing leg ``leg``: a function of times -> (ankle height, shank
+    angle θ3 + θ4).
+
+    The schedule, turned where it would put the toe or the heel into the ground
+    (:func:`ground_limits`). A ground limit can move fast: where the lowest point of the heel's
+    circle about the ankle grazes the ground, the limiting angle moves as the square root of
+    the ankle's height above it. So the turn away from the schedule is the least one that
+    meets the limits and changes by at most ``GUARD_RATE`` (the smallest cone envelope of the
+    required turns), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
+    same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
+    foot continues and becomes the stance foot. Between the grid's points the limits hold to a
+    fraction of a millimetre. Where the leg is too low for any foot (first steps from rest,
+    closing steps, slow steps), turning it cannot help: :func:`lifted_foot` lifts the ankle."""
+    grid = guard_grid(foot)
+    return grounded_angles_on_grid(body, foot, t, grid, *leg(grid))
+
+
+def grounded_angles_on_grid(body, foot: SwingFoot, t, grid, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`grounded_angles` with the leg's ankle height and shank angle at the times
+    :func:`guard_grid` given. One step of :func:`grounded_feet`."""
+    return grounded_feet(body, [foot], [np.asarray(t, float)], [grid], ankle_y, shank)
+
+
+def lifted_foot(body, foot: SwingFoot, t, grid, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The foot the body shows at step-local times ``t`` (n,) for the schedule ``foot``: θ5 and θ6
+    (rad, :func:`grounded_angles`) and the ankle's lift above the leg's (m, :func:`ankle_lift`),
+    given the leg at the times :func:`guard_grid` ``grid``: its hip and ankle (m, 2) and its shank
+    angle θ3 + θ4 (m,). One step of :func:`lifted_feet`."""
+    return lifted_feet(body, [foot], [np.asarray(t, float)], [grid], hip, ankle, shank)
+
+
+def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:
+    """The least turn (rad) at the times ``grid`` (increasing) that is at least ``required`` where
+    that is positive and at most it where negative, changes by at most ``rate`` (rad/s) and is 0 at
+    both ends (the foot leaves and lands as the stance foot has it): the cone envelope
+    max_j(part_j - rate |t_i - t_j|) of each sign's part, capped by the ends' cones."""
+    return _rate_limited_turn(_Grids([np.asarray(grid, float)]), np.asarray(required, float), rate)
+
+
+def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowest: np.ndarray) -> np.ndarray:
+    """How far (m) the body lifts the swing ankle above the leg's at the times ``grid`` (a step's
+    :func:`guard_grid`), given the leg's hip and ankle (n, 2) and its foot's
+    lowest point there (:func:`lowest_sole_point`, with the grounded angles).
+
+    The second stage of the ground guard. Where the leg carries the ankle lower than any foot fits
+    (the straight knee of swing2's end and swing3 with the hip low: first steps from rest, closing
+    steps, slow steps; docs/body.md), turning the foot cannot keep it out of the ground; the body
+    then bends its knee, with the hip and the ankle's x kept, by the least angle that lifts the
+    lowest point of the foot onto the ground, the bend changing by at most GUARD_RATE and 0 at
+    toe-off and heel strike (:func:`rate_limited_turn`). The foot is carried up with the ankle,
+    unturned. Where the foot clears the ground the lift is 0 and the body's leg is the leg given."""
+    return _ankle_lift(body, _Grids([np.asarray(grid, float)]), hip, ankle, lowest)
