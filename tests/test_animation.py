@@ -173,3 +173,117 @@ def test_no_body_no_gif(run_dir, tmp_path):
     run.angles = None                                       # a results folder from before angles.csv
     assert write_animation(run, tmp_path / GIF_FILE) is None
     assert not (tmp_path / GIF_FILE).exists()
+
+
+# -- a long walk: memory and drawing that do not grow with it (issue 32) -----------------------------
+def test_frames_go_to_the_file_as_they_are_drawn_and_decode_as_given():
+    """GifStream writes each frame when the next one comes: it holds two, whatever the length."""
+    import io
+    from klaw_ocp.io.gif_file import GifStream
+    frames = []
+    for x in (0, 4, 8, 8, 12, 16):               # a square moving right, standing still once
+        frame = np.full((30, 40, 4), 255, np.uint8)
+        frame[5:15, 3 + x:13 + x, :3] = (0, 114, 178)
+        frame[20:, :, :3] = (140, 109, 70)
+        frames.append(frame)
+    assert np.array_equal(frames[2], frames[3])               # shown twice as long, as one frame
+    handle = io.BytesIO()
+    gif = GifStream(handle, GIF_FPS)
+    written = []
+    for frame in frames:
+        gif.add_frame(frame)
+        written.append(len(handle.getvalue()))
+    gif.finish()
+    # the header comes with the first frame, each frame when the next one differs from it
+    assert written[0] > 0 and written[1] > written[0] and written[2] > written[1]
+    assert written[3] == written[2] and written[4] > written[3] and written[5] > written[4]
+    assert len(handle.getvalue()) > written[5] and gif.frames == 5
+    with Image.open(handle) as decoded:
+        assert decoded.n_frames == 5 and decoded.info.get("loop") == 0
+        durations, pixels = [], []
+        for k in range(decoded.n_frames):
+            decoded.seek(k)
+            durations.append(decoded.info["duration"])
+            pixels.append(np.asarray(decoded.convert("RGB")))
+    assert durations == [80, 80, 160, 80, 80]
+    for shown, frame in zip(pixels, [frames[0], frames[1], frames[2], frames[4], frames[5]]):
+        assert np.array_equal(shown, frame[..., :3])
+
+
+def test_write_animation_streams_the_frames_into_its_temporary_file(run_dir, tmp_path, monkeypatch):
+    import klaw_ocp.io.animation as animation
+    original = animation.animation_figure
+    sizes = []
+
+    def recording(run, fps=GIF_FPS):
+        made = original(run, fps)
+        move = made.frame
+
+        def frame(i):
+            sizes.append(sum(p.stat().st_size for p in tmp_path.glob(f".{GIF_FILE}.*")))
+            move(i)
+        made.frame = frame
+        return made
+    monkeypatch.setattr(animation, "animation_figure", recording)
+    write_animation(RunData.from_folder(run_dir), tmp_path / GIF_FILE)
+    assert len(sizes) >= 10 and sizes[0] == 0
+    assert all(b > a for a, b in zip(sizes[2:], sizes[3:]))     # a frame reaches the file while the next is drawn
+
+
+def test_poses_and_labels_in_chunks_give_the_same_gif(run_dir, tmp_path, monkeypatch):
+    import klaw_ocp.io.animation as animation
+    from klaw_ocp.io.gif_pixels import MovingLabels
+    run = RunData.from_folder(run_dir)
+    write_animation(run, tmp_path / "whole.gif")
+    monkeypatch.setattr(animation, "POSE_CHUNK", 4)
+    monkeypatch.setattr(MovingLabels, "BLOCK", 1)
+    write_animation(run, tmp_path / "chunks.gif")
+    assert (tmp_path / "chunks.gif").read_bytes() == (tmp_path / "whole.gif").read_bytes()
+
+
+def test_a_frame_of_a_long_walk_draws_only_what_its_views_show():
+    """A 198-step walk (110 s): a frame's footprints, ground ticks, path, poses and metre labels are
+    those about the walker, so that a frame costs the same at any length of walk."""
+    from pathlib import Path
+    from _long_walks import tiled
+    from klaw_ocp.io.animation import POSE_CHUNK
+    from klaw_ocp.walk import simulate_walk
+    natural = RunData.from_walk(simulate_walk(Path(__file__).resolve().parents[1] / "configs" / "natural_walk.yaml"))
+    long = tiled(natural, 9)
+    animation = animation_figure(long)
+    assert animation.frames == math.floor(long.duration * GIF_FPS + 1e-9) + 1 > 1300
+    for i in (animation.frames // 2, animation.frames - 1):
+        animation.frame(i)
+        animation.pixels()
+        for drawn in animation.blitter.moving:
+            artist = getattr(drawn, "artist", drawn)
+            if hasattr(artist, "get_segments"):
+                assert len(artist.get_segments()) <= 40, artist
+            elif hasattr(artist, "get_xdata"):
+                assert len(artist.get_xdata()) <= 120, artist
+        labels = animation.overlays[0]
+        assert 1 <= len(labels.shown()) <= 4 and len(labels.blocks) <= 2
+    assert all(len(points) <= POSE_CHUNK for points in animation.poses.chains.values())
+
+
+def test_a_metre_label_is_drawn_whole_while_its_tick_is_in_the_side_view_and_not_at_all_after(run_dir):
+    animation = animation_figure(RunData.from_folder(run_dir))
+    labels = animation.overlays[0]
+    side = labels.ax
+    box = side.bbox
+    metre = 1.0
+    k = int(np.flatnonzero(np.isclose(labels.values, metre))[0])
+    _, _, (_, _, _, alpha) = labels._block(k // labels.BLOCK)[k % labels.BLOCK]
+    ink_width = int(np.any(alpha[..., 0] > 0.5, axis=0).sum())
+    per_px = (side.get_xlim()[1] - side.get_xlim()[0]) / box.width
+    for px_inside in (2.0, -2.0):                     # the tick 2 px inside the view's right edge, then outside
+        right = metre + px_inside * per_px
+        side.set_xlim(right - (box.width * per_px), right)
+        labels.place()
+        canvas = np.full((int(animation.fig.bbox.height), int(animation.fig.bbox.width), 3), 255, np.uint8)
+        labels.blend(canvas)
+        near_edge = np.any(canvas[:, int(box.x1) - 25:] < 170, axis=(0, 2))   # alpha > 0.5 over white
+        if px_inside > 0:                             # whole, reaching past the edge as an axis' tick label does
+            assert near_edge.sum() == ink_width and near_edge[25:].any()
+        else:
+            assert not near_edge.any()

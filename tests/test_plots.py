@@ -287,3 +287,77 @@ def test_the_hip_height_plot_shows_one_bump_per_step(natural):
             peaks = np.flatnonzero(rises[:-1] & ~rises[1:])
             big = [p for p in peaks if curve[p + 1] - curve.min() > 0.5 * (curve.max() - curve.min())]
             assert len(big) == 1, (step["index"], peaks)
+
+
+# -- a long walk: a readable selection, and the figure says which --------------------------------
+@pytest.fixture(scope="module")
+def long_run(natural):
+    """The natural walk's 22 steps walked 5 times end to end: 110 steps, nothing solved."""
+    from _long_walks import tiled
+    return tiled(natural, 5)
+
+
+def test_a_walk_of_up_to_60_steps_is_drawn_whole_a_longer_one_its_first_40_and_last_10():
+    from klaw_ocp.io.plot_style import drawn_note, drawn_steps
+    assert drawn_steps(22) == [(0, 21)] and drawn_steps(60) == [(0, 59)] and drawn_note(60) == ""
+    assert drawn_steps(61) == [(0, 39), (51, 60)] and drawn_steps(1000) == [(0, 39), (990, 999)]
+    assert "steps 0–39 and 990–999 of 1000 drawn, 40–989 left out" in drawn_note(1000)
+
+
+@pytest.mark.parametrize("name", ["hip_height", "torques", "states", "gait_diagram"])
+def test_a_long_walks_time_plots_draw_its_first_and_last_steps_and_say_so(natural, long_run, name):
+    fig = PLOTS[name][1](long_run)
+    steps = long_run.steps
+    first_end = steps[39]["t_start_s"] + steps[39]["t_step_s"]
+    last_start, end = steps[-10]["t_start_s"], walk_end(long_run)
+    texts = [fig._suptitle.get_text() if fig._suptitle else ""] + [ax.get_title(loc="left") for ax in fig.axes]
+    assert any("steps 0–39 and 100–109 of 110 drawn, 40–99 left out" in t for t in texts), texts
+    # the time axes come in pairs side by side: the first 40 steps, then the last 10
+    # (the gait diagram's zoom on one step aside)
+    timed = [ax for ax in fig.axes if not ax.get_title(loc="left").startswith("Step ")]
+    parts = sorted({tuple(np.round(ax.get_xlim(), 1)) for ax in timed})
+    assert len(parts) == 2 and len(timed) % 2 == 0, parts
+    (a0, a1), (b0, b1) = parts                  # (the gait diagram leaves room for its markers)
+    assert a0 == pytest.approx(0.0, abs=0.5) and a1 == pytest.approx(first_end, abs=0.5)
+    assert b0 == pytest.approx(last_start, abs=0.5) and b1 == pytest.approx(end, abs=0.5)
+    # a short walk has one time axis per row and no note
+    short = PLOTS[name][1](natural)
+    assert not any("long walk" in t for t in [short._suptitle.get_text() if short._suptitle else ""]
+                   + [ax.get_title(loc="left") for ax in short.axes])
+
+
+def test_a_long_walks_strobe_draws_its_first_and_last_steps_in_a_few_panels_and_says_so(natural, long_run):
+    fig = legs_figure(long_run)
+    titles = [ax.get_title(loc="left") for ax in fig.axes]
+    assert titles[0].startswith("steps 0–") and titles[-1].startswith("steps 100–109")
+    assert "(after steps 40–99, not drawn)" in titles[-1]
+    assert sum("not drawn" in t for t in titles) == 1
+    drawn = [tuple(int(v) for v in t.split(",")[0].removeprefix("steps ").split("–")) for t in titles]
+    assert [a for a, _ in drawn] == sorted(a for a, _ in drawn)
+    assert sum(b - a + 1 for a, b in drawn) == 50              # 40 + 10 steps, each in one panel
+    assert "steps 0–39 and 100–109 of 110 drawn" in fig._suptitle.get_text()
+    width, height = fig.get_size_inches() * DPI
+    assert len(fig.axes) <= 6 and height < 4000                 # a 1000-step strobe was 48 723 px high
+    image = _decode(png_bytes(fig))
+    assert np.any(image[..., :3] < 0.9, axis=-1).mean() > 0.03
+    assert not any("not drawn" in ax.get_title(loc="left") for ax in legs_figure(natural).axes)
+
+
+def test_a_long_walk_renders_every_plot(long_run):
+    for name, (_, data) in render_plots(long_run).items():
+        image = _decode(data)
+        assert 100 < image.shape[0] < 4000 and np.any(image[..., :3] < 0.9, axis=-1).mean() > 0.02, name
+
+
+@pytest.mark.parametrize("methods", [("multiple-shooting",), ("multiple-shooting", "plain-shooting")])
+def test_the_sweep_legend_lies_inside_the_figure(methods):
+    """sweep.png's legend was cut at both edges of a one-method (one-panel) figure."""
+    from klaw_ocp.io.sweep_plot import sweep_figure
+    rows = [{"method": m, "walk.speed": v, "status": "ok" if v != 3 else "failed", "wall_s": 0.3 * v,
+             "failed_step": 2, "failed_subphase": "swing2"} for m in methods for v in (1, 3, 5)]
+    fig = sweep_figure(rows, ["walk.speed"], "natural_walk")
+    fig.canvas.draw()
+    (legend,) = fig.legends
+    box, page = legend.get_window_extent(fig.canvas.get_renderer()), fig.bbox
+    assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0, (box, page)
+    assert "loading the solver kernels" in " ".join(t.get_text() for t in legend.get_texts())

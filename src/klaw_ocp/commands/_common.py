@@ -49,11 +49,6 @@ def resolved_header(config_path, sets=(), method: str | None = None, stance: str
             "every default filled in. Rerun with: klaw-ocp run config.resolved.yaml --out DIR")
 
 
-def check_plots(config, plots: bool, flag: str = "--no-plots") -> None:
-    """Nothing to refuse: the plots draw a walk of any accepted length (a long walk's first and
-    last steps, plot_style.drawn_steps; docs/limits.md). Kept while commands/run.py calls it."""
-
-
 def check_output_dir(path, field: str = "--out") -> Path:
     """``path`` as a Path if it can be the output folder of a command: an existing folder this
     process may write in, or a folder it can create (its nearest existing ancestor a folder it

@@ -27,7 +27,7 @@ from pathlib import Path
 from .. import choices
 from ..errors import one_line
 from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
-from ._common import add_set_option, check_output_dir, check_plots, load, resolved_header
+from ._common import add_set_option, check_output_dir, load, resolved_header
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
 VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
@@ -77,7 +77,6 @@ def handle_run(args: argparse.Namespace) -> int:
                            "--out" if args.out is not None else "output.dir")
     plots = config.output.plots and not args.no_plots
     animation = config.output.animation and not args.no_animation
-    check_plots(config, plots)
     if plots or animation:               # the drawing processes import matplotlib while the walk is solved
         from ..io.render_pool import prewarm
         prewarm()
@@ -210,7 +209,6 @@ def handle_validate(args: argparse.Namespace) -> int:
     from .plan import format_table
     config = load(args.config, args.sets)
     check_output_dir(config.output_dir(), "output.dir")
-    check_plots(config, config.output.plots, flag="klaw-ocp run --no-plots")
     plans = config.full_plan()
     print(format_table(config.body_model(), plans, config.name))
     s, w = config.solver, config.walk

@@ -8,7 +8,7 @@ angles' frames, at ``output.fps``, are interpolated linearly to it) and played b
   follows the pelvis, over a ground line with a tick every 0.25 m and a label every metre, and a
   footprint on the ground wherever a foot was planted (from its heel strike on, drawn where the
   foot lay flat);
-- *front* (z to the right, the walker's right, y up; seen from behind): the legs, the pelvis
+- *seen from behind* (z to the right, the walker's right, y up): the legs, the pelvis
   (hip to hip), the trunk, shoulders, arms and head, the feet's lines on the ground (each foot
   walks along its own line) and the pelvis centre's plumb line, which weaves between them;
 - *from above* (z across, stretched; x forward, up the panel): the footprints along the two
@@ -18,10 +18,12 @@ A title names the walk and counts the time. Like every plot it reads results onl
 :class:`~klaw_ocp.io.run_data.RunData`, from a walk in memory or a finished results folder), so
 ``klaw-ocp plot DIR --animation`` redraws it. Every artist is made once; a frame only moves them
 (``set_data``) and the figure is drawn once per frame on its Agg canvas, small (8 x 4 in at
-80 dpi), with no constrained layout and no axis machinery in the moving panels. Frames are
-collected by matplotlib's :class:`~matplotlib.animation.PillowWriter` (no ffmpeg), mapped to one
-shared palette (taken from the first frame, no dithering: flat colours compress well and no
-frame flickers) and written atomically (a temporary file in the same folder, then a rename).
+80 dpi), with no constrained layout and no axis machinery in the moving panels; it draws only
+what its views show, so a frame costs the same at any length of walk. Each frame is mapped to one
+shared palette (taken from the first frame, no dithering: flat colours compress well and no frame
+flickers) and written to the file as soon as it is drawn (:mod:`.gif_file`, no ffmpeg): the
+memory does not grow with the walk. The file is written atomically (a temporary file in the same
+folder, then a rename).
 """
 from __future__ import annotations
 
@@ -37,7 +39,8 @@ from matplotlib.transforms import blended_transform_factory
 from ..body_motion.skeleton import SIDES, Dimensions
 from .body_plots import CHAINS, chain_points, has_angles, skeleton_at
 from .gait_diagram import gait_events
-from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, PaletteWriter, StaticText
+from .gif_file import GifStream
+from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, StaticText
 from .plot_style import LEG_COLOURS, add_axes_in, new_figure
 from .strobe import GROUND_COLOUR, TRUNK_COLOUR
 from .writers import atomic_path
@@ -55,6 +58,7 @@ PLAN_HALF_WIDTH_M = 0.16         # the view from above spans z = ± this (stretc
 PLAN_BEHIND_M, PLAN_AHEAD_M = 1.55, 0.75   # ... and x from the pelvis back and forward
 GROUND_LOW_M = -0.17             # room below the ground for the tick labels
 FOOTPRINT = {"lw": 4.0, "alpha": 0.55}
+POSE_CHUNK = 256                 # frames whose poses are computed at once (_Poses)
 
 _FAINT_SIDE = {"left": 0.55, "right": 1.0}       # side view: the left side is the far one
 
@@ -137,24 +141,49 @@ def _laid_flat(heel: np.ndarray, toe: np.ndarray, length: float) -> tuple[np.nda
 
 
 # -- the figure -------------------------------------------------------------------------------------
+class _Poses:
+    """The stick figure at the GIF's frames: the points of CHAINS (name -> (k, 3)) and the head's
+    centre (3,), computed :data:`POSE_CHUNK` frames at a time as the frames come, so that the
+    memory does not grow with the walk (the skeleton of all 7000 frames of a 1000-step walk at
+    once: 75 MB)."""
+
+    def __init__(self, run, times: np.ndarray):
+        self.run, self.times = run, times
+        neck, top = self._load(0)
+        #: the head's radius, from the first frames (the head is rigid)
+        self.radius = 0.55 * float(np.median(np.linalg.norm(top - neck, axis=1)))
+
+    def _load(self, chunk: int) -> tuple[np.ndarray, np.ndarray]:
+        skeleton = skeleton_at(self.run, self.times[chunk * POSE_CHUNK:(chunk + 1) * POSE_CHUNK])
+        self.chains = chain_points(skeleton)
+        neck, top = skeleton.position("C1"), skeleton.end_sites["C1"]
+        self.head = neck + 0.45 * (top - neck)
+        self.chunk = chunk
+        return neck, top
+
+    def __getitem__(self, i: int) -> tuple[dict, np.ndarray]:
+        if self.chunk != i // POSE_CHUNK:
+            self._load(i // POSE_CHUNK)
+        j = i - self.chunk * POSE_CHUNK
+        return {name: points[j] for name, points in self.chains.items()}, self.head[j]
+
+
 class _Panel:
     """One view: an axes without axis machinery (no ticks, no spines: a frame draws fast), placed
     in inches with the limits at one scale in both directions, and the stick figure in the view's
-    two world coordinates ``(u, v)`` (0, 1, 2: x, y, z): one line per colour (the chains of
-    ``chains``, NaN between them) and the head."""
+    two world coordinates ``(u, v)`` (0, 1, 2: x, y, z): one line per colour (the chains
+    ``names`` of that colour, NaN between them) and the head."""
 
-    def __init__(self, fig, rect_in, u: int, v: int, alpha: dict, chains: dict, limits):
+    def __init__(self, fig, rect_in, u: int, v: int, alpha: dict, names, limits):
         self.ax = add_axes_in(fig, *rect_in)
         self.ax.set_axis_off()
         self.ax.set_autoscale_on(False)
         self.ax.set_xlim(*limits[0])
         self.ax.set_ylim(*limits[1])
         self.u, self.v = u, v
-        self.points, self.lines = {}, {}
+        self.names, self.lines = {}, {}
         for key in ("left", "trunk", "right"):
-            mine = [points for name, points in chains.items() if CHAINS[name][0] == key]
-            gap = np.full((mine[0].shape[0], 1, 3), np.nan)
-            self.points[key] = np.concatenate([part for points in mine for part in (points, gap)][:-1], axis=1)
+            self.names[key] = [name for name in names if CHAINS[name][0] == key]
             colour = TRUNK_COLOUR if key == "trunk" else LEG_COLOURS[key]
             zorder = {"left": 3, "trunk": 4, "right": 5}[key] if alpha is _FAINT_SIDE else 4
             self.lines[key] = self.ax.add_line(Line2D([], [], color=colour, lw=2.2, alpha=alpha.get(key, 1.0),
@@ -163,24 +192,33 @@ class _Panel:
         self.head = self.ax.add_patch(Circle((0, 0), 0.1, facecolor="white", edgecolor=TRUNK_COLOUR, lw=1.4,
                                              zorder=4))
 
-    def pose(self, head: np.ndarray, i: int) -> None:
+    def pose(self, chains: dict, head: np.ndarray) -> None:
+        """The figure at one frame: ``chains`` name -> (k, 3) points, ``head`` (3,)."""
         for key, line in self.lines.items():
-            p = self.points[key][i]
+            p = np.concatenate([part for name in self.names[key] for part in (chains[name], _GAP)][:-1])
             line.set_data(p[:, self.u], p[:, self.v])
-        self.head.center = (head[i, self.u], head[i, self.v])
+        self.head.center = (head[self.u], head[self.v])
 
 
-def _ground(ax, u0: float, u1: float, minor: float, major: float) -> np.ndarray:
-    """A ground line from u0 to u1 with a tick every ``minor``, longer every ``major``; returns
-    the positions of the long ticks (for their labels)."""
-    ax.fill_between([u0, u1], -0.045, 0.0, color="#e9e3d9", lw=0, zorder=0)
-    ax.plot([u0, u1], [0.0, 0.0], color=GROUND_COLOUR, lw=1.2, zorder=1)
+_GAP = np.full((1, 3), np.nan)
+
+
+def _ticks(u0: float, u1: float, minor: float, major: float) -> tuple[list, np.ndarray]:
+    """The ground's ticks from u0 to u1, one every ``minor``, longer every ``major``: their
+    segments, and the positions of the long ones (for their labels)."""
     ticks = np.arange(np.ceil(u0 / minor - 1e-9), np.floor(u1 / minor + 1e-9) + 1) * minor
     is_major = np.isclose(np.remainder(ticks + major / 2, major) - major / 2, 0.0, atol=1e-9)
     length = np.where(is_major, 0.07, 0.035)
-    ax.add_collection(LineCollection([[(u, 0.0), (u, -h)] for u, h in zip(ticks, length)], colors=GROUND_COLOUR,
-                                     lw=0.9, zorder=1))
-    return np.round(ticks[is_major], 9)
+    return [[(u, 0.0), (u, -h)] for u, h in zip(ticks, length)], np.round(ticks[is_major], 9)
+
+
+def _ground(ax, u0: float, u1: float, minor: float, major: float, ticks: bool = True):
+    """A ground line from u0 to u1 with a tick every ``minor``, longer every ``major`` (``ticks``:
+    else none yet); returns the ticks' collection and the positions of the long ticks."""
+    ax.fill_between([u0, u1], -0.045, 0.0, color="#e9e3d9", lw=0, zorder=0)
+    ax.plot([u0, u1], [0.0, 0.0], color=GROUND_COLOUR, lw=1.2, zorder=1)
+    segments, majors = _ticks(u0, u1, minor, major) if ticks else ([], np.array([]))
+    return ax.add_collection(LineCollection(segments, colors=GROUND_COLOUR, lw=0.9, zorder=1)), majors
 
 
 def _footprint_lines(ax):
@@ -190,14 +228,14 @@ def _footprint_lines(ax):
 
 def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
     """walk.gif's figure, every artist made once, and the function that moves them to a frame
-    (:class:`Animation`). Nothing is drawn here but the static texts."""
+    (:class:`Animation`). Nothing is drawn here but the static texts. What a frame draws is only
+    what its views show (the ground's ticks, the footprints, the path near the walker), so that a
+    frame costs the same at any length of walk."""
     times = gif_times(run, fps)
-    skeleton = skeleton_at(run, times)
-    chains = chain_points(skeleton)
-    neck, top = skeleton.position("C1"), skeleton.end_sites["C1"]
-    head = neck + 0.45 * (top - neck)
-    radius = 0.55 * float(np.median(np.linalg.norm(top - neck, axis=1)))
-    root = skeleton.position("pelvis")
+    poses = _Poses(run, times)
+    a = run.angles                   # the pelvis at every frame (as the skeleton has it): 24 bytes a frame
+    root = np.column_stack([np.interp(np.clip(times, a["time"][0], a["time"][-1]), a["time"], a[f"root_{axis}"])
+                            for axis in "xyz"])
     prints = footprints(run)
     y_range = (GROUND_LOW_M, float(run.body["height"]) + 0.12)
 
@@ -214,24 +252,27 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
     plan_left = front_left + front_w + gap
     plan_w, plan_bottom = width - plan_left - 0.1, 0.24
     static = StaticText()
-    side = _Panel(fig, (left, bottom_in, side_w, panel_h), 0, 1, _FAINT_SIDE,
-                  {n: p for n, p in chains.items() if n != "pelvis"}, ((0.0, SIDE_WINDOW_M), y_range))
-    front = _Panel(fig, (front_left, bottom_in, front_w, panel_h), 2, 1, {}, chains,
+    side = _Panel(fig, (left, bottom_in, side_w, panel_h), 0, 1, _FAINT_SIDE, [n for n in CHAINS if n != "pelvis"],
+                  ((0.0, SIDE_WINDOW_M), y_range))
+    front = _Panel(fig, (front_left, bottom_in, front_w, panel_h), 2, 1, {}, list(CHAINS),
                    ((-FRONT_HALF_WIDTH_M, FRONT_HALF_WIDTH_M), y_range))
     plan = add_axes_in(fig, plan_left, plan_bottom, plan_w, panel_h - (plan_bottom - bottom_in))
     for panel in (side, front):
-        panel.head.set_radius(radius)
+        panel.head.set_radius(poses.radius)
     static.add(side.ax.transAxes, (0.0, 1.0), "side", va="bottom")
-    static.add(front.ax.transAxes, (0.0, 1.0), "front (from behind)", va="bottom")
+    static.add(front.ax.transAxes, (0.0, 1.0), "seen from behind", va="bottom")
 
-    # side: the ground along the whole walk; its labels move with it (shown only in the window)
+    # side: the ground along the whole walk, its ticks only about the window (set at each frame);
+    # the metre labels move with it (shown only in the window)
     x_all = np.concatenate([root[:, 0]] + [[f.heel[0], f.toe[0]] for f in prints])
-    metres = _ground(side.ax, float(x_all.min()) - SIDE_WINDOW_M, float(x_all.max()) + SIDE_WINDOW_M, 0.25, 1.0)
+    ground_x = (float(x_all.min()) - SIDE_WINDOW_M, float(x_all.max()) + SIDE_WINDOW_M)
+    side_ticks, _ = _ground(side.ax, *ground_x, 0.25, 1.0, ticks=False)
+    metres = _ticks(*ground_x, 0.25, 1.0)[1]
     labels = MovingLabels(fig, side.ax, metres, [f"{u:.0f} m" for u in metres], -0.085, {"color": "#555555"})
     side_prints = _footprint_lines(side.ax)
 
     # front: ground, the feet's lines (where the footprints lie across), the pelvis centre's plumb line
-    for u in _ground(front.ax, -FRONT_HALF_WIDTH_M, FRONT_HALF_WIDTH_M, 0.1, 0.2):
+    for u in _ground(front.ax, -FRONT_HALF_WIDTH_M, FRONT_HALF_WIDTH_M, 0.1, 0.2)[1]:
         if abs(u) < 0.3:
             static.add(front.ax.transData, (u, -0.085), f"{100 * u:.0f}" + (" cm" if u > 0 else ""),
                        fontsize=FONT - 1, ha="center", va="top", color="#555555")
@@ -277,35 +318,46 @@ def animation_figure(run, fps: float = GIF_FPS) -> "Animation":
               + [*front.lines.values(), front.head, plumb, centre]
               + [*plan_prints.values(), path, here, title])
 
-    side_segments = {s: [((f.heel[0], 0.004), (f.toe[0], 0.004)) for f in prints if f.side == s] for _, s in SIDES}
-    plan_segments = {s: [((f.heel[2], f.heel[0]), (f.toe[2], f.toe[0])) for f in prints if f.side == s]
-                     for _, s in SIDES}
+    mine = {s: [f for f in prints if f.side == s] for _, s in SIDES}
+    side_segments = {s: [((f.heel[0], 0.004), (f.toe[0], 0.004)) for f in mine[s]] for s in mine}
+    plan_segments = {s: [((f.heel[2], f.heel[0]), (f.toe[2], f.toe[0])) for f in mine[s]] for s in mine}
     # a foot planted after the last frame (the heel strike that closes the walk, up to 1 / fps
     # later) shows on the last one
-    planted = {s: np.minimum([f.t for f in prints if f.side == s], times[-1]) for _, s in SIDES}
+    planted = {s: np.minimum([f.t for f in mine[s]], times[-1]) for s in mine}
+    # how far forward the walk had reached by each footprint / frame: those before the first that
+    # reach a view's back edge lie wholly behind it and are not drawn
+    reach = {s: np.maximum.accumulate([max(f.heel[0], f.toe[0]) for f in mine[s]] or [0.0]) for s in mine}
+    path_reach = np.maximum.accumulate(root[:, 0])
     shown = {}
 
     def frame(i: int) -> None:
         t, x = times[i], root[i, 0]
         x0 = x - SIDE_LEAD * SIDE_WINDOW_M
         side.ax.set_xlim(x0, x0 + SIDE_WINDOW_M)
+        first_tick = int(np.floor(x0 / 0.25)) - 1
+        if shown.get("ticks") != first_tick:
+            shown["ticks"] = first_tick
+            side_ticks.set_segments(_ticks(0.25 * first_tick, 0.25 * first_tick + SIDE_WINDOW_M + 0.5, 0.25, 1.0)[0])
         labels.place()
-        side.pose(head, i)
-        front.pose(head, i)
+        chains, head = poses[i]
+        side.pose(chains, head)
+        front.pose(chains, head)
         plumb.set_data([root[i, 2], root[i, 2]], [0.0, root[i, 1]])
         centre.set_data([root[i, 2]], [root[i, 1]])
-        for _, s in SIDES:
-            count = int(np.searchsorted(planted[s], t, side="right"))
-            if shown.get(s) != count:
-                shown[s] = count
-                side_prints[s].set_segments(side_segments[s][:count])
-                plan_prints[s].set_segments(plan_segments[s][:count])
+        behind = min(x0, x - PLAN_BEHIND_M) - 0.5
+        for s in mine:
+            window = (int(np.searchsorted(reach[s], behind)), int(np.searchsorted(planted[s], t, side="right")))
+            if shown.get(s) != window:
+                shown[s] = window
+                side_prints[s].set_segments(side_segments[s][slice(*window)])
+                plan_prints[s].set_segments(plan_segments[s][slice(*window)])
         plan.set_ylim(x - PLAN_BEHIND_M, x + PLAN_AHEAD_M)
-        path.set_data(root[: i + 1, 2], root[: i + 1, 0])
+        start = max(0, int(np.searchsorted(path_reach, x - PLAN_BEHIND_M - 0.1)) - 1)
+        path.set_data(root[start: i + 1, 2], root[start: i + 1, 0])
         here.set_data([root[i, 2]], [x])
         title.set_text(f" {t:5.2f} s")           # after f"{run.name}   t ="
 
-    return Animation(fig, frame, len(times), Blitter(fig, moving, [static]), [labels])
+    return Animation(fig, frame, len(times), Blitter(fig, moving, [static]), [labels], poses)
 
 
 @dataclass
@@ -317,6 +369,7 @@ class Animation:
     frames: int
     blitter: Blitter
     overlays: list       # drawn over each frame's pixels (blend(rgb)): the side view's moving labels
+    poses: object = None     # the stick figure's points, a chunk of frames at a time (_Poses)
 
     def pixels(self) -> np.ndarray:
         """The frame as it stands: (h, w, 4) uint8 RGBA (opaque)."""
@@ -325,16 +378,16 @@ class Animation:
 
 def write_animation(run, path, fps: float = GIF_FPS) -> Path | None:
     """Render ``run``'s walk.gif to ``path`` atomically (a temporary file in the same folder, then
-    a rename; the user's normal file mode); None, writing nothing, if it has no body to animate."""
+    a rename; the user's normal file mode), each frame written to the file as it is drawn
+    (:class:`~.gif_file.GifStream`); None, writing nothing, if it has no body to animate."""
     if not has_angles(run):
         return None
     path = Path(path)
     animation = animation_figure(run, fps)
-    with atomic_path(path, suffix=path.suffix or ".gif") as tmp:
-        writer = PaletteWriter(fps=fps)
-        writer.setup(animation.fig, str(tmp), dpi=GIF_DPI)
+    with atomic_path(path, suffix=path.suffix or ".gif") as tmp, open(tmp, "wb") as handle:
+        gif = GifStream(handle, fps)
         for i in range(animation.frames):
             animation.frame(i)
-            writer.add_frame(animation.pixels())
-        writer.finish()
+            gif.add_frame(animation.pixels())
+        gif.finish()
     return path

@@ -3,9 +3,10 @@ its heel strikes and toe-offs (:func:`~klaw_ocp.io.gait_diagram.gait_events`):
 
 - ``joint_angles.png``: hip flexion, knee flexion and ankle dorsiflexion of each leg over the
   normalised gait cycle (0-100 % from a heel strike of that leg to its next), the way gait
-  laboratories show them: every cycle thin, their mean bold, the mean toe-off marked.
+  laboratories show them: every cycle thin, their mean bold, the mean toe-off marked (a long
+  walk's thin lines only for the cycles of the steps the other plots draw, plot_style.drawn_steps).
 - ``body.png``: the skeleton at the heel strikes that open the steps, drawn side on from the
-  forward kinematics of the angles (:func:`klaw_ocp.body_motion.skeleton.forward_kinematics`), with
+  forward kinematics of the angles (:func:`klaw_ocp.kinematics.skeleton.forward_kinematics`), with
   the dynamic model of ``legs.png`` over it (the new stance leg's telescope, the hind leg with the
   virtual leg's angles, the upper body), so that the two can be seen to agree. (At the walk's last
   heel strike the model would show the leg finishing its stance as a telescope, which has no knee
@@ -23,7 +24,7 @@ from matplotlib.ticker import MultipleLocator
 
 from ..body_motion.skeleton import ANGLE_NAMES, SIDES, forward_kinematics
 from .gait_diagram import gait_events
-from .plot_style import FONT_PT, LEG_COLOURS, add_axes_in, new_figure, style_axes
+from .plot_style import FONT_PT, LEG_COLOURS, add_axes_in, drawn_steps, new_figure, part_spans, style_axes
 from .strobe import TRUNK_COLOUR, draw_ground, draw_posture
 
 #: (row label, angle name after the side prefix)
@@ -131,18 +132,28 @@ def joint_angles_figure(run):
     if not has_angles(run):
         return _note(f"{run.name}: no angles.csv (no completed step, or written before it), no joint angles")
     percent = np.linspace(0.0, 100.0, CYCLE_POINTS)
-    fig = new_figure(10.5, 7.4, layout=None)
-    axes = _grid(fig, len(JOINT_ROWS), 2, 4.55, 1.85, 0.85, 0.62, 0.3, 0.18)
+    parts, spans = drawn_steps(len(run.steps)), part_spans(run)
+    note = "" if len(parts) == 1 else ("a long walk: the mean of every cycle; thin, the cycles that start in steps "
+                                       + " and ".join(f"{a}–{b}" for a, b in parts))
+    extra = 0.2 if note else 0.0                  # the title's second line
+    fig = new_figure(10.5, 7.4 + extra, layout=None)
+    axes = _grid(fig, len(JOINT_ROWS), 2, 4.55, 1.85, 0.85, 0.62 + extra, 0.3, 0.18)
     for col, (_, side) in enumerate(SIDES):
         colour = LEG_COLOURS[side]
+        # the thin lines: the cycles of the steps drawn (a band of a long walk's hundreds is no more
+        # readable, and drawing them took 50 MB)
+        starts = np.array([t0 for t0, _, _ in gait_cycles(run, side)])
+        thin = np.ones(len(starts), bool) if len(parts) == 1 else np.any(
+            [(starts >= t0 - 1e-9) & (starts < t1 - 1e-9) for t0, t1 in spans], axis=0)
         for row, (label, angle) in enumerate(JOINT_ROWS):
             ax = axes[row, col]
             style_axes(ax)
             curves, toe_offs = cycle_curves(run, side, angle)
             if len(curves):
                 # every cycle in one artist: NaN ends each cycle's line
-                cycles = np.column_stack([curves, np.full(len(curves), np.nan)]).ravel()
-                ax.plot(np.tile(np.r_[percent, np.nan], len(curves)), cycles, color=colour, lw=0.6, alpha=0.35)
+                shown = curves[thin]
+                cycles = np.column_stack([shown, np.full(len(shown), np.nan)]).ravel()
+                ax.plot(np.tile(np.r_[percent, np.nan], len(shown)), cycles, color=colour, lw=0.6, alpha=0.35)
                 ax.plot(percent, curves.mean(axis=0), color=colour, lw=2.2)
             else:
                 ax.text(0.5, 0.5, "no complete gait cycle", transform=ax.transAxes, ha="center", va="center",
@@ -173,8 +184,8 @@ def joint_angles_figure(run):
                Line2D([], [], color="#444444", lw=1.0, ls="--", label="mean toe-off")]
     fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.01), ncols=3, fontsize=FONT_PT,
                frameon=False)
-    fig.suptitle(f"Joint angles over the gait cycle (flexion and dorsiflexion positive): {run.label}",
-                 fontsize=FONT_PT + 2, y=0.985)
+    fig.suptitle(f"Joint angles over the gait cycle (flexion and dorsiflexion positive): {run.label}"
+                 + (f"\n{note}" if note else ""), fontsize=FONT_PT + 2, y=0.985)
     return fig
 
 

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .plot_style import FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, axes_column, new_figure, style_axes
+from .plot_style import (FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, axes_rows, drawn_note, mark_breaks, new_figure,
+                         part_spans, style_axes)
 
 LEGS = ("right", "left")
 SWING_KINDS = ("swing1", "swing2", "swing3")
@@ -186,18 +187,20 @@ def _pct(step, key) -> str:
     return f"{100 * step[key] / step['t_swing_s']:.0f} %" if step["t_swing_s"] > 0 else "-"
 
 
-def _rest_notes(ax, run) -> None:
+def _rest_notes(first, last, run) -> None:
+    """The notes of a walk from or to rest over the first and the last part of the whole walk."""
     end = walk_end(run)
     if run.summary.get("start_from_rest"):
-        ax.annotate("start from rest: both feet down", xy=(0, 1.0), xycoords=("data", "axes fraction"),
-                    xytext=(0, 3), textcoords="offset points", ha="left", va="bottom", fontsize=FONT_PT)
+        first.annotate("start from rest: both feet down", xy=(0, 1.0), xycoords=("data", "axes fraction"),
+                       xytext=(0, 3), textcoords="offset points", ha="left", va="bottom", fontsize=FONT_PT)
     if run.summary.get("end_at_rest"):
-        ax.annotate("end at rest: both feet down", xy=(end, 1.0), xycoords=("data", "axes fraction"),
-                    xytext=(0, 3), textcoords="offset points", ha="right", va="bottom", fontsize=FONT_PT)
+        last.annotate("end at rest: both feet down", xy=(end, 1.0), xycoords=("data", "axes fraction"),
+                      xytext=(0, 3), textcoords="offset points", ha="right", va="bottom", fontsize=FONT_PT)
 
 
 def gait_diagram_figure(run):
-    """The gait diagram of ``run`` (figure 3 of the paper) as a :class:`matplotlib.figure.Figure`."""
+    """The gait diagram of ``run`` (figure 3 of the paper) as a :class:`matplotlib.figure.Figure`;
+    a long walk's whole-walk row in two parts (plot_style.drawn_steps), the title saying which."""
     if not run.steps:
         fig = new_figure(8.0, 3.0)
         ax = fig.add_subplot()
@@ -205,18 +208,30 @@ def gait_diagram_figure(run):
         ax.set_axis_off()
         return fig
     # fixed layout, inches: rows of labels on the left, the legend and the value box on the right
-    fig = new_figure(10.5, 5.5, layout=None)
-    whole, zoom = axes_column(fig, [1.6, 2.1], left=0.85, right=2.3, top=0.58, gaps=0.78, sharex=False)
+    note, spans = drawn_note(len(run.steps)), part_spans(run)
+    extra = 0.2 if note else 0.0             # the title's second line
+    fig = new_figure(10.5, 5.5 + extra, layout=None)
+    rows = axes_rows(fig, [1.6, 2.1], 0.85, 2.3, 0.58 + extra, 0.78, spans, split=[0], sharex=False)
+    wholes, zoom = rows[0], rows[1][0]
     bars, end = gait_bars(run), walk_end(run)
-    for ax, rows in ((whole, _ROW_Y), (zoom, _ZOOM_ROW_Y)):
+    for ax, rows_y in [(whole, _ROW_Y) for whole in wholes] + [(zoom, _ZOOM_ROW_Y)]:
         style_axes(ax)
-        draw_gait_bars(ax, run, bars, rows=rows)
-        ax.set_xlabel("t (s)")
-    whole.set_xlim(-0.012 * end, 1.012 * end)    # room for the markers at 0 and at the end
-    whole.vlines([s["t_start_s"] for s in run.steps] + [end], 0, 1, transform=whole.get_xaxis_transform(),
-                 colors="#555555", lw=0.5, zorder=1)
-    _rest_notes(whole, run)
-    whole.set_title(f"Gait diagram: {run.label}, {len(run.steps)} steps, {end:.2f} s", loc="left", pad=15)
+        draw_gait_bars(ax, run, bars, rows=rows_y)
+        if ax is wholes[0] or ax is zoom:
+            ax.set_xlabel("t (s)")
+    if len(wholes) == 1:
+        wholes[0].set_xlim(-0.012 * end, 1.012 * end)    # room for the markers at 0 and at the end
+    else:                                                 # ... and at the ends of each part
+        margin = 0.012 * sum(t1 - t0 for t0, t1 in spans)
+        for whole, (t0, t1) in zip(wholes, spans):
+            whole.set_xlim(t0 - margin, t1 + margin)
+    for whole in wholes:
+        whole.vlines([s["t_start_s"] for s in run.steps] + [end], 0, 1, transform=whole.get_xaxis_transform(),
+                     colors="#555555", lw=0.5, zorder=1)
+    mark_breaks(wholes)
+    _rest_notes(wholes[0], wholes[-1], run)
+    wholes[0].set_title(f"Gait diagram: {run.label}, {len(run.steps)} steps, {end:.2f} s"
+                        + (f"\n{note}" if note else ""), loc="left", pad=15)
     k = representative_step(run)
     step = run.steps[k]
     t0 = step["t_start_s"]
@@ -227,8 +242,8 @@ def gait_diagram_figure(run):
     zoom.set_title(f"Step {k} as in the paper's figure 3 (eq. 2: t_step = t_stance − t_ds = t_swing + t_ds)",
                    loc="left")
     lines = _annotate_step(zoom, run, k)
-    whole.legend(handles=_legend_handles(), loc="upper left", bbox_to_anchor=(1.03, 1.0), fontsize=FONT_PT,
-                 frameon=False, borderaxespad=0.0)
+    wholes[-1].legend(handles=_legend_handles(), loc="upper left", bbox_to_anchor=(1.03, 1.0), fontsize=FONT_PT,
+                      frameon=False, borderaxespad=0.0)
     zoom.text(1.03, 0.5, "\n".join(lines), transform=zoom.transAxes, ha="left", va="center",
               family="monospace", fontsize=FONT_PT,
               bbox={"boxstyle": "round,pad=0.4", "fc": "#f7f7f7", "ec": "#999999"})

@@ -1,18 +1,16 @@
-"""The pixels of walk.gif (:mod:`.animation`): texts rasterised once and blended into every frame,
-and one shared palette for every frame, so that a frame costs one Agg draw.
+"""The pixels of walk.gif (:mod:`.animation`): the still parts drawn once, texts rasterised once and
+blended into every frame, the moving lines drawn straight with the Agg renderer, so that a frame
+costs one Agg draw of what moves (:class:`Blitter`). The frames go to the file as they are drawn
+(:mod:`.gif_file`).
 
 matplotlib lays out and rasterises every text anew at each draw, which took half the time of a
-frame; Pillow's own mapping to a given palette is approximate (white came out 252 grey)."""
+frame."""
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.animation import PillowWriter
 
 #: texts' font size (points)
 FONT = 8
-#: the palette's size: the most frequent colours of the first frame
-PALETTE_COLOURS = 128
-_UNSEEN = 255                    # a colour not looked up yet (palette indices are < PALETTE_COLOURS)
 
 
 def rasterise(fig, items) -> list:
@@ -32,7 +30,7 @@ def rasterise(fig, items) -> list:
     shift = height_px - fig.bbox.height                          # keeps fig's pixel rows from the top
     texts = [layer.text(x, y + shift, text, transform=IdentityTransform(), **style) for x, y, text, style in items]
     layer.canvas.draw()
-    rgba = np.asarray(layer.canvas.buffer_rgba()).astype(float) / 255.0
+    rgba = np.asarray(layer.canvas.buffer_rgba())       # uint8: only the patches become floats
     height, width = rgba.shape[:2]
     renderer = layer.canvas.get_renderer()
     patches = []
@@ -40,7 +38,7 @@ def rasterise(fig, items) -> list:
         box = text.get_window_extent(renderer)
         r0, r1 = max(0, int(height - box.y1) - 2), min(height, int(np.ceil(height - box.y0)) + 2)
         c0, c1 = max(0, int(box.x0) - 2), min(width, int(np.ceil(box.x1)) + 2)
-        patch = rgba[r0:r1, c0:c1]             # buffer_rgba is straight (not premultiplied) alpha
+        patch = rgba[r0:r1, c0:c1].astype(float) / 255.0   # buffer_rgba is straight (not premultiplied) alpha
         patches.append((r0, c0, patch[..., :3] * 255.0, patch[..., 3:]))   # rows: as in fig (see shift)
     return patches
 
@@ -83,33 +81,53 @@ class StaticText:
 
 
 class MovingLabels:
-    """Labels that keep their text and move sideways with a view (the side view's metres): each
-    rasterised once, centred on its anchor, and blended at the anchor's pixel column of the frame,
-    clipped to the view."""
+    """Labels that keep their text and move sideways with a view (the side view's metres), shown as
+    an axis shows its tick labels: whole while the anchor (its tick) is in the view and the label
+    in the figure, not at all once it has left (a label cut at the view's edge, "4 r" for "4 m",
+    read as another mark). Each is rasterised once, centred on its anchor, :data:`BLOCK` labels at
+    a time as the view reaches them, and dropped when the view has left them: a long walk has one
+    a metre, and rasterising all of them at once took a layer 40 px high a label (640 MB of floats
+    for a 1000-step walk)."""
+
+    BLOCK = 16
 
     def __init__(self, fig, ax, values, texts, y: float, style: dict):
-        self.ax, self.values = ax, np.asarray(values, float)
-        x_px, y_px = ax.transData.transform((float(ax.get_xlim()[0]), y))
-        anchor_x = fig.bbox.width / 2
-        # stacked one below the other under the figure, each centred on anchor_x, its top at y_px
-        items = [(anchor_x, y_px - 40 * k, text, {"fontsize": FONT - 1, "ha": "center", "va": "top", **style})
-                 for k, text in enumerate(texts)]
-        self.patches = rasterise(fig, items)
-        self.row0 = [p[0] - 40 * k for k, p in enumerate(self.patches)]  # back to y_px's rows
-        self.offset = [p[1] - int(round(anchor_x)) for p in self.patches]
+        self.fig, self.ax = fig, ax
+        self.values, self.texts = np.asarray(values, float), list(texts)
+        self.y_px = float(ax.transData.transform((float(ax.get_xlim()[0]), y))[1])
+        self.anchor_x = fig.bbox.width / 2
+        self.style = {"fontsize": FONT - 1, "ha": "center", "va": "top", **style}
+        self.blocks = {}                 # block -> [(row0, column offset, patch)] of its labels
         self.x_px = None
+
+    def _block(self, block: int) -> list:
+        if block not in self.blocks:
+            texts = self.texts[block * self.BLOCK:(block + 1) * self.BLOCK]
+            # stacked one below the other under the figure, each centred on anchor_x, its top at y_px
+            patches = rasterise(self.fig, [(self.anchor_x, self.y_px - 40 * k, text, self.style)
+                                           for k, text in enumerate(texts)])
+            self.blocks[block] = [(p[0] - 40 * k, p[1] - int(round(self.anchor_x)), p)   # back to y_px's rows
+                                  for k, p in enumerate(patches)]
+        return self.blocks[block]
 
     def place(self) -> None:
         """Take the anchors' pixel columns from the view's limits now (after a frame's set_xlim)."""
         self.x_px = self.ax.transData.transform(np.column_stack([self.values, np.zeros_like(self.values)]))[:, 0]
-        box = self.ax.bbox
-        self.columns = (int(round(box.x0)), int(round(box.x1)))
+        self.columns = (self.ax.bbox.x0, self.ax.bbox.x1)
+
+    def shown(self) -> np.ndarray:
+        """The labels whose anchor is in the view now (:meth:`place`)."""
+        return np.flatnonzero((self.x_px >= self.columns[0]) & (self.x_px <= self.columns[1]))
 
     def blend(self, rgb: np.ndarray) -> None:
-        lo, hi = self.columns
-        for k in np.flatnonzero((self.x_px > lo - 60) & (self.x_px < hi + 60)):
-            col0 = int(round(self.x_px[k])) + self.offset[k]
-            blend_patch(rgb, self.patches[k], self.row0[k], col0, self.columns)
+        shown = self.shown()
+        for block in set(self.blocks) - set((shown // self.BLOCK).tolist()):
+            del self.blocks[block]                 # the view has left them
+        for k in shown:
+            row0, offset, patch = self._block(k // self.BLOCK)[k % self.BLOCK]
+            col0 = int(round(self.x_px[k])) + offset
+            if col0 >= 0 and col0 + patch[2].shape[1] <= rgb.shape[1]:
+                blend_patch(rgb, patch, row0, col0)
 
 
 class LiveText:
@@ -300,61 +318,3 @@ class Blitter:
         for overlay in overlays:
             overlay.blend(rgba[..., :3])
         return rgba
-
-
-class PaletteWriter(PillowWriter):
-    """matplotlib's PillowWriter (Pillow writes the GIF: no ffmpeg), given each frame's pixels
-    (:meth:`Animation.pixels`: one draw, no savefig) as palette images (:class:`Palette`)."""
-
-    def setup(self, fig, outfile, dpi=None):
-        super().setup(fig, outfile, dpi=dpi)
-        self._palette = None
-
-    def add_frame(self, rgba: np.ndarray) -> None:
-        if self._palette is None:
-            self._palette = Palette(rgba)
-        self._frames.append(self._palette.image(rgba))
-
-    def grab_frame(self, **savefig_kwargs):
-        raise NotImplementedError("use add_frame(Animation.pixels())")
-
-
-class Palette:
-    """One palette for every frame: the PALETTE_COLOURS most frequent colours of the first frame,
-    exactly (the background, the ground and the lines keep their colours); any other colour (an
-    antialiased edge) takes its nearest, without dithering (flat colours compress well and nothing
-    flickers). Pillow's own mapping to a given palette is approximate (white came out 252 grey),
-    so the colours are looked up here, each new one once."""
-
-    def __init__(self, rgba: np.ndarray):
-        values, counts = np.unique(self._codes(rgba), return_counts=True)
-        top = values[np.argsort(-counts, kind="stable")[:PALETTE_COLOURS]]
-        self.colours = self._rgb(top)
-        self.lookup = np.full(1 << 24, _UNSEEN, dtype=np.uint8)      # colour code -> palette index (16 MB)
-        self.lookup[top] = np.arange(len(top))
-        padded = np.vstack([self.colours, np.repeat(self.colours[:1], 256 - len(top), axis=0)])
-        self.flat = padded.astype(np.uint8).ravel().tolist()
-
-    @staticmethod
-    def _codes(rgba: np.ndarray) -> np.ndarray:
-        """(h, w, 4) uint8 -> (h, w) int: R + 256 G + 65536 B (the four bytes read as one number)."""
-        return (np.ascontiguousarray(rgba).view("<u4")[..., 0] & 0xFFFFFF).astype(np.intp)
-
-    @staticmethod
-    def _rgb(codes: np.ndarray) -> np.ndarray:
-        return np.column_stack([codes & 255, (codes >> 8) & 255, (codes >> 16) & 255]).astype(np.int32)
-
-    def image(self, rgba: np.ndarray):
-        """``rgba`` (h, w, 4) uint8 (alpha ignored) as a "P" image of this palette."""
-        from PIL import Image
-        codes = self._codes(rgba)
-        index = self.lookup[codes]
-        unseen = index == _UNSEEN
-        if unseen.any():
-            new = np.unique(codes[unseen])
-            distance = ((self._rgb(new)[:, None, :] - self.colours[None, :, :]) ** 2).sum(axis=2)
-            self.lookup[new] = distance.argmin(axis=1)
-            index = self.lookup[codes]
-        image = Image.fromarray(index, "P")
-        image.putpalette(self.flat)
-        return image

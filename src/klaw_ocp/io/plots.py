@@ -12,6 +12,10 @@
 - ``joint_angles.png`` and ``body.png`` (§4, the body of 56 angles): hip, knee and ankle over the
   gait cycle, and the skeleton at heel strikes beside the dynamic model, :mod:`klaw_ocp.io.body_plots`.
 
+A walk of more than 60 steps (:data:`~klaw_ocp.io.plot_style.MAX_DRAWN_STEPS`) is drawn in two
+parts, its first 40 steps and its last 10, side by side on a broken time axis, and the title says
+which steps (:func:`~klaw_ocp.io.plot_style.drawn_steps`): a whole long walk was a solid band.
+
 Every time plot follows bioptim: a dark thin vertical line at each step boundary (heel strike),
 light ones at the subphase boundaries (toe-off, end of swing1, end of swing2), and one colour per
 subphase (:data:`~klaw_ocp.io.plot_style.SUBPHASE_COLOURS`). A line is drawn per subphase with
@@ -32,8 +36,8 @@ from matplotlib.ticker import MaxNLocator
 
 from ..errors import ConfigError, out_of_range
 from .gait_diagram import gait_diagram_figure, walk_end
-from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, axes_column, new_figure,
-                         png_bytes, style_axes)
+from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, axes_rows, drawn_note,
+                         mark_breaks, new_figure, part_spans, png_bytes, style_axes)
 from .body_plots import body_figure, joint_angles_figure
 from .strobe import legs_figure
 
@@ -137,32 +141,40 @@ def _has_samples(run) -> bool:
 
 # fixed layout of the time plots, inches (see plot_style.add_axes_in)
 _WIDTH, _LEFT, _RIGHT, _TOP, _GAP, _XLABEL, _LEGEND_ROW = 10.5, 1.15, 0.25, 0.42, 0.1, 0.5, 0.24
+_NOTE_ROW = 0.2              # a title's second line: which steps a long walk's plot draws
 
 
 def _series_figure(run, columns, title: str, axis_height: float):
-    """One axis per column over time, shared x, each line coloured by subphase."""
+    """One axis per column over time, shared x, each line coloured by subphase; a long walk in
+    two parts side by side (plot_style.drawn_steps), the title saying which steps."""
     if not _has_samples(run):
         return _empty(run, title.lower())
     recoveries = swing2_recoveries(run)
     handles = _subphase_handles(recoveries)
     ncols = 7 if not recoveries else 4
     legend_rows = -(-len(handles) // ncols)
+    note, spans = drawn_note(len(run.steps)), part_spans(run)
+    top = _TOP + (_NOTE_ROW if note else 0.0)
     bottom = _XLABEL + legend_rows * _LEGEND_ROW + 0.12
-    height = _TOP + len(columns) * axis_height + (len(columns) - 1) * _GAP + bottom
+    height = top + len(columns) * axis_height + (len(columns) - 1) * _GAP + bottom
     fig = new_figure(_WIDTH, height, layout=None)
-    axes = axes_column(fig, [axis_height] * len(columns), _LEFT, _RIGHT, _TOP, _GAP)
-    for ax, column in zip(axes, columns):
-        style_axes(ax)
-        draw_boundaries(ax, run)
-        draw_recoveries(ax, recoveries)
-        for name, (t, y) in subphase_lines(run.table, column).items():
-            ax.plot(t, y, color=SUBPHASE_COLOURS[name], lw=1.2, zorder=3)
-        ax.set_ylabel(f"{SYMBOLS[column]}\n{_ROLE[column]}")
-        ax.yaxis.set_major_locator(MaxNLocator(nbins=4))     # few ticks: each costs a few artists
-        ax.margins(x=0.0, y=0.08)
-    axes[-1].set_xlabel("t (s), walk time from the first heel strike")
-    axes[-1].set_xlim(0, walk_end(run))
-    fig.suptitle(f"{title}: {run.label}", fontsize=FONT_PT + 2, y=1 - 0.1 / height, va="top")
+    rows = axes_rows(fig, [axis_height] * len(columns), _LEFT, _RIGHT, top, _GAP, spans)
+    for row, column in zip(rows, columns):
+        for ax in row:
+            style_axes(ax)
+            draw_boundaries(ax, run)
+            draw_recoveries(ax, recoveries)
+            for name, (t, y) in subphase_lines(run.table, column).items():
+                ax.plot(t, y, color=SUBPHASE_COLOURS[name], lw=1.2, zorder=3)
+            ax.yaxis.set_major_locator(MaxNLocator(nbins=4))     # few ticks: each costs a few artists
+            ax.margins(x=0.0, y=0.08)
+        row[0].set_ylabel(f"{SYMBOLS[column]}\n{_ROLE[column]}")
+        mark_breaks(row)
+    rows[-1][0].set_xlabel("t (s), walk time from the first heel strike")
+    for ax, span in zip(rows[-1], spans):
+        ax.set_xlim(*span)
+    fig.suptitle(f"{title}: {run.label}" + (f"\n{note}" if note else ""), fontsize=FONT_PT + 2,
+                 y=1 - 0.1 / height, va="top")
     fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=ncols,
                fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig
@@ -184,17 +196,17 @@ def states_figure(run):
 
 def hip_height_figure(run):
     """``hip_height.png``: hip height, the §4.2 reference sinusoid (dashed), the heel-strike floor
-    per step and the step boundaries; below, hip height minus reference in mm."""
+    per step and the step boundaries; below, hip height minus reference in mm. A long walk in two
+    parts side by side (plot_style.drawn_steps), the title saying which steps."""
     if not _has_samples(run):
         return _empty(run, "hip height")
-    height = 5.0
+    note, spans = drawn_note(len(run.steps)), part_spans(run)
+    top_in = 0.35 + (_NOTE_ROW if note else 0.0)
+    height = 4.65 + top_in
     fig = new_figure(_WIDTH, height, layout=None)
-    top, bottom = axes_column(fig, [2.75, 1.15], 1.0, _RIGHT, 0.35, 0.12)
+    rows = axes_rows(fig, [2.75, 1.15], 1.0, _RIGHT, top_in, 0.12, spans)
     t, y, ref = run.table["t"], run.table["hip_y"], run.table["hip_y_ref"]
     has_ref = bool(np.isfinite(ref).any())
-    for ax in (top, bottom):
-        style_axes(ax)
-        draw_boundaries(ax, run, subphases=False)
     # the floor: a step function over each step (a gap where a step recorded no reference)
     ft, fy = [], []
     for s in run.steps:
@@ -202,27 +214,37 @@ def hip_height_figure(run):
         if floor is not None:
             ft += [s["t_start_s"], s["t_start_s"] + s["t_step_s"], np.nan]
             fy += [floor, floor, np.nan]
-    handles = [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)")]
-    if ft:
-        handles += top.plot(ft, fy, color="#0072B2", lw=1.1, ls="-.", zorder=2,
-                            label="heel-strike floor (lower of the step's two heel-strike heights)")
-    if has_ref:
-        handles += top.plot(t, ref, color="#D55E00", lw=1.3, ls=(0, (4, 2.5)), zorder=3,
-                            label="reference sinusoid y_ref (§4.2)")
-    handles += top.plot(t, y, color=ACCENT, lw=1.1, zorder=4, label="hip height y_hip")
-    top.set_ylabel(SYMBOLS["hip_y"])
     values = np.concatenate([y, np.asarray(fy, float), ref if has_ref else y])
     lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
     span = max(hi - lo, 1e-3)
-    top.set_ylim(lo - 0.08 * span, hi + 0.55 * span)      # headroom for the legend
-    top.legend(handles=handles, loc="upper center", ncols=2, fontsize=FONT_PT, frameon=True, framealpha=0.9)
-    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps (§4.2 asks for one bump per step)", loc="left")
-    bottom.axhline(0.0, color="#777777", lw=0.8)
-    if has_ref:
-        bottom.plot(t, 1000.0 * (y - ref), color=ACCENT, lw=1.0)
+    legend = None
+    for k, (top, bottom) in enumerate(zip(*rows)):
+        for ax in (top, bottom):
+            style_axes(ax)
+            draw_boundaries(ax, run, subphases=False)
+        handles = [Line2D([], [], color="#444444", lw=0.8, label="step boundary (heel strike)")]
+        if ft:
+            handles += top.plot(ft, fy, color="#0072B2", lw=1.1, ls="-.", zorder=2,
+                                label="heel-strike floor (lower of the step's two heel-strike heights)")
+        if has_ref:
+            handles += top.plot(t, ref, color="#D55E00", lw=1.3, ls=(0, (4, 2.5)), zorder=3,
+                                label="reference sinusoid y_ref (§4.2)")
+        handles += top.plot(t, y, color=ACCENT, lw=1.1, zorder=4, label="hip height y_hip")
+        top.set_ylim(lo - 0.08 * span, hi + 0.55 * span)      # headroom for the legend
+        bottom.axhline(0.0, color="#777777", lw=0.8)
+        if has_ref:
+            bottom.plot(t, 1000.0 * (y - ref), color=ACCENT, lw=1.0)
+        bottom.set_xlim(*spans[k])
+        legend = legend or handles
+    top, bottom = rows[0][0], rows[1][0]
+    top.set_ylabel(SYMBOLS["hip_y"])
+    top.legend(handles=legend, loc="upper center", ncols=2, fontsize=FONT_PT, frameon=True, framealpha=0.9)
+    top.set_title(f"Hip height: {run.label}, {len(run.steps)} steps (§4.2 asks for one bump per step)"
+                  + (f"\n{note}" if note else ""), loc="left")
     bottom.set_ylabel("y_hip − y_ref\n(mm)")
     bottom.set_xlabel("t (s), walk time from the first heel strike")
-    bottom.set_xlim(0, walk_end(run))
+    for row in rows:
+        mark_breaks(row)
     return fig
 
 

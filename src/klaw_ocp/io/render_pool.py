@@ -127,8 +127,21 @@ def _receive(run) -> None:
 
 
 def _draw_here(task: str, gif_path):
-    """A worker's task, on the RunData it received."""
-    return _draw(_RUN, task, gif_path)
+    """A worker's task, on the RunData it received; then the memory its drawing freed handed back
+    to the system (glibc keeps it in the process otherwise), so that a worker holds about one
+    plot's at a time."""
+    try:
+        return _draw(_RUN, task, gif_path)
+    finally:
+        _trim()
+
+
+def _trim() -> None:
+    try:
+        import ctypes
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError, TypeError):       # not glibc (macOS; Windows has no forkserver anyway)
+        pass
 
 
 def _draw(run, task: str, gif_path):

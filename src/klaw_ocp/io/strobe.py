@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
 from ..errors import ConfigError, out_of_range
-from .plot_style import FONT_PT, LEG_COLOURS, axes_column, new_figure, style_axes
+from .plot_style import FONT_PT, LEG_COLOURS, axes_column, drawn_note, drawn_steps, new_figure, style_axes
 
 TRUNK_COLOUR = "#555555"
 GROUND_COLOUR = "#8c6d46"
@@ -189,11 +189,16 @@ def draw_posture(ax, run, t: float, legs=("right", "left"), upper_body: bool = T
     return {**{k: tuple(v) for k, v in pts.items()}, "stance_leg": stance, "row": row}
 
 
-def _panels(run, n_panels: int) -> list[tuple[int, int]]:
-    """(first step, last step) of each panel: consecutive steps in groups of about equal size."""
-    n = len(run.steps)
-    bounds = np.linspace(0, n, n_panels + 1).round().astype(int)
+def _panels(first: int, last: int, n_panels: int) -> list[tuple[int, int]]:
+    """(first step, last step) of each panel: steps ``first`` to ``last`` in groups of about equal
+    size."""
+    bounds = first + np.linspace(0, last + 1 - first, n_panels + 1).round().astype(int)
     return [(int(a), int(b) - 1) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
+def _x_extent(points: dict, mask: np.ndarray) -> tuple[float, float]:
+    g = np.concatenate([points[k][mask, 0] for k in ("hip", "stance_ankle", "swing_ankle", "head")])
+    return float(g.min()), float(g.max())
 
 
 def _legend_handles(legs, upper_body: bool) -> list:
@@ -209,7 +214,8 @@ def _legend_handles(legs, upper_body: bool) -> list:
 def legs_figure(run, legs=("right", "left"), every: int | None = None):
     """``legs.png``: the strobe of :func:`draw_strobe` over the whole walk at one scale
     (M_PER_INCH, equal aspect), in as many panels (rows) as keep each under MAX_PANEL_M, as the
-    paper's figure 8."""
+    paper's figure 8; a long walk's first and last steps only (plot_style.drawn_steps: a
+    1000-step walk was 93 panels), the title and the panel after the gap saying so."""
     legs = tuple(legs)
     if not run.steps or len(run.table["t"]) == 0:
         fig = new_figure(8.0, 3.0)
@@ -221,13 +227,15 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     # one leg: half the lines per pose, so twice the poses (figure 8)
     every = auto_every(run, POSE_SPACING_M if upper else POSE_SPACING_M / 2) if every is None else every
     all_points = pose_points(run, np.arange(len(run.table["t"])))
-    xs = np.concatenate([all_points[k][:, 0] for k in ("hip", "stance_ankle", "swing_ankle", "head")])
-    groups = _panels(run, max(1, math.ceil(float(xs.max() - xs.min()) / MAX_PANEL_M)))
-    ranges = []
-    for a, b in groups:
-        mask = (all_points["step"] >= a) & (all_points["step"] <= b)
-        g = np.concatenate([all_points[k][mask, 0] for k in ("hip", "stance_ankle", "swing_ankle", "head")])
-        ranges.append((float(g.min()), float(g.max())))
+    parts = drawn_steps(len(run.steps))
+    groups, ranges, longest = [], [], MAX_PANEL_M
+    for a, b in parts:        # a later part in panels as long as the first part's (its last steps: one)
+        lo, hi = _x_extent(all_points, (all_points["step"] >= a) & (all_points["step"] <= b))
+        panels = _panels(a, b, max(1, math.ceil((hi - lo) / longest)))
+        ranges += [_x_extent(all_points, (all_points["step"] >= p) & (all_points["step"] <= q)) for p, q in panels]
+        groups += panels
+        longest = max([longest] + [r1 - r0 for r0, r1 in ranges])
+    skipped = {a1: (b0 + 1, a1 - 1) for (_, b0), (a1, _) in zip(parts, parts[1:])}   # first drawn -> left out
     width_m = max(hi - lo for lo, hi in ranges) + 0.3
     y_top = float(max(all_points["head"][:, 1].max() if upper else 0.0, all_points["hip"][:, 1].max())) + 0.08
     y_bottom = -0.08
@@ -236,7 +244,7 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
     ax_w, ax_h = width_m / M_PER_INCH, (y_top - y_bottom) / M_PER_INCH
     fig_w = max(8.0, 0.75 + ax_w + 0.3)
     ncols = len(handles) if fig_w >= 10.5 else 3          # the legend needs about 10 in in one row
-    top, gap, bottom = 0.82, 0.72, 0.62 + 0.25 * -(-len(handles) // ncols)
+    top, gap, bottom = 0.82 + (0.22 if len(parts) > 1 else 0.0), 0.72, 0.62 + 0.25 * -(-len(handles) // ncols)
     left = 0.75 + (fig_w - 0.75 - ax_w - 0.3) / 2
     fig = new_figure(fig_w, top + len(groups) * ax_h + (len(groups) - 1) * gap + bottom, layout=None)
     axes = axes_column(fig, [ax_h] * len(groups), left, fig_w - left - ax_w, top, gap, sharex=False)
@@ -253,12 +261,14 @@ def legs_figure(run, legs=("right", "left"), every: int | None = None):
         ax.yaxis.set_major_locator(MultipleLocator(0.5))
         ax.xaxis.set_major_locator(MultipleLocator(1.0 if width_m < 12 else 2.0))
         ax.set_ylabel("y (m)")
-        ax.set_title(f"steps {a}–{b}, t = {t0:.2f}–{t1:.2f} s", loc="left", fontsize=FONT_PT + 1)
+        left_out = f"   (after steps {skipped[a][0]}–{skipped[a][1]}, not drawn)" if a in skipped else ""
+        ax.set_title(f"steps {a}–{b}, t = {t0:.2f}–{t1:.2f} s{left_out}", loc="left", fontsize=FONT_PT + 1)
     axes[-1].set_xlabel("x (m), forward from the first stance ankle")
     which = " and ".join(legs) + (" legs" if len(legs) == 2 else " leg")
     height = fig.get_size_inches()[1]
+    note = drawn_note(len(run.steps))
     fig.suptitle(f"Strobe of the dynamic model (paper's figure 8), {which}, a pose every {every} samples\n"
-                 f"{run.label}", fontsize=FONT_PT + 2, y=1 - 0.08 / height, va="top")
+                 f"{run.label}" + (f"\n{note}" if note else ""), fontsize=FONT_PT + 2, y=1 - 0.08 / height, va="top")
     fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=ncols,
                fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig

@@ -26,6 +26,8 @@ _PANEL_IN = 4.6      # panel width, inches
 _DPI = 130
 _MAX_TICKS = 16      # numeric axes with more distinct values get automatic ticks
 _FAIL_COLOUR = "#d62728"
+_WALL_NOTE = "(wall time: the first walk in each process includes loading the solver kernels)"
+_LEGEND_MARGIN_IN = 0.1      # the legend's room from each edge of the figure
 
 
 def _label(value) -> str:
@@ -138,12 +140,7 @@ def sweep_figure(rows: list[dict], varied_paths: list[str], title: str | None = 
     if mappable is not None:
         bar = fig.colorbar(mappable, ax=list(axes), pad=0.02, fraction=0.05 if ypath else 0.04)
         bar.set_label("max wall time per cell [s]" if rest else "wall time per walk [s]")
-    handles = [Line2D([], [], marker="s", ls="", color="#3b8f88", markeredgecolor="0.2", label="converged"),
-               Line2D([], [], marker="x", ls="", color=_FAIL_COLOUR, markeredgewidth=2.2,
-                      label="failed / error"),
-               Line2D([], [], ls="", label="(wall time: the first walk in each process includes loading the solver kernels)")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False,
-               handletextpad=0.3, columnspacing=1.5)
+    _legend(fig)
     n = {status: sum(r["status"] == status for r in rows) for status in ("ok", "failed", "error")}
     head = (title or "klaw-ocp sweep") + f": {len(rows)} walks, {n['ok']} ok, {n['failed']} failed, {n['error']} error"
     if rest:
@@ -151,6 +148,23 @@ def sweep_figure(rows: list[dict], varied_paths: list[str], title: str | None = 
                  f"colour = max wall time")
     fig.suptitle(head, fontsize=10)
     return fig
+
+
+def _legend(fig) -> None:
+    """The legend under the panels, in one row if it fits in the figure's width, else with the
+    note on two lines, else in one column: a single panel's figure (6 in) is narrower than the
+    one-row legend, which was cut at both edges."""
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    wrapped = _WALL_NOTE.replace(" includes", "\nincludes")
+    for ncol, text in ((3, _WALL_NOTE), (3, wrapped), (1, wrapped)):
+        handles = [Line2D([], [], marker="s", ls="", color="#3b8f88", markeredgecolor="0.2", label="converged"),
+                   Line2D([], [], marker="x", ls="", color=_FAIL_COLOUR, markeredgewidth=2.2, label="failed / error"),
+                   Line2D([], [], ls="", label=text)]
+        legend = fig.legend(handles=handles, loc="outside lower center", ncol=ncol, fontsize=8, frameon=False,
+                            handletextpad=0.3, columnspacing=1.5)
+        if legend.get_window_extent(renderer).width <= fig.bbox.width - 2 * _DPI * _LEGEND_MARGIN_IN or ncol == 1:
+            return
+        legend.remove()
 
 
 def sweep_png(rows: list[dict], varied_paths: list[str], title: str | None = None) -> bytes:
