@@ -19,6 +19,7 @@ process, one after the other, as before.
 """
 from __future__ import annotations
 
+import gc
 import os
 import time
 
@@ -73,6 +74,10 @@ def render_outputs(run, plots_dir=None, gif_path=None) -> tuple[dict, dict]:
     process, each one's own time)."""
     tasks = [t for t in COST_ORDER if (t == GIF_TASK and gif_path is not None)
              or (t != GIF_TASK and plots_dir is not None)]
+    # the result files are written: what rendering them took (a 1000-step walk's text files are
+    # a few hundred MB of transient strings) goes back to the system before the workers draw
+    gc.collect()
+    _trim()
     start = time.perf_counter()
     done = _in_pool(run, tasks, gif_path, start)
     if done is None:         # in this process: the plots then walk.gif, each timed on its own
