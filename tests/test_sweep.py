@@ -10,9 +10,9 @@ from klaw_ocp.cli import main
 from klaw_ocp.errors import ConfigError, ConvergenceError
 
 HEADER = ["walk.speed", "method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
-          "wall_s", "build_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", "peak_F_w", "peak_F_theta1", "peak_F_theta2",
+          "wall_s", "build_s", "compile_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", "peak_F_w", "peak_F_theta1", "peak_F_theta2",
           "peak_pa", "peak_F_theta3", "peak_F_theta4", "fallbacks", "message"]
-NUMERIC = HEADER[5:19]
+NUMERIC = HEADER[5:20]
 SHORT = {"name": "short", "body": {"height": 1.8, "mass": 80},
          "walk": {"speed": 5.0, "steps": 2}, "solver": {"method": "plain-shooting"}}
 
@@ -33,7 +33,7 @@ def _read(path):
         return list(csv.reader(handle))
 
 
-TIMINGS = ("wall_s", "build_s", "max_subphase_s")
+TIMINGS = ("wall_s", "build_s", "compile_s", "max_subphase_s")
 
 
 #: result columns compared as numbers: what the walk measured (the residual is separate)

@@ -39,7 +39,7 @@ METHODS = choices.METHODS
 FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 #: The columns of a row after the varied paths, in CSV order.
 RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
-                  "wall_s", "build_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", *(f"peak_{c}" for c in FORCE_COLUMNS),
+                  "wall_s", "build_s", "compile_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", *(f"peak_{c}" for c in FORCE_COLUMNS),
                   "fallbacks", "message")
 STATUSES = ("ok", "failed", "error")
 
@@ -167,6 +167,7 @@ def _walk_metrics(walk, keep_residual: bool) -> dict:
     out = {"steps": len(walk.steps), "iterations": int(sum(s.get("iterations", 0) for _, s in subs)),
            "mean_speed_kmh": finite_real(summary.get("mean_hip_speed_kmh")),
            "build_s": float(sum(s.get("build_s", 0.0) for _, s in subs)),
+           "compile_s": float(walk.compile_s),
            "max_subphase_s": float(max((s.get("wall_s", 0.0) for _, s in subs), default=0.0)),
            "fallbacks": ";".join(f"step{k}.{s['name']}:{f.get('name') if isinstance(f, dict) else f}"
                                  for k, s in subs for f in s.get("fallbacks", []))}
