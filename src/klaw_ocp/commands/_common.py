@@ -12,7 +12,8 @@ from ..errors import ConfigError, short_repr
 
 SET_HELP = ("override one config field by its dotted path, the value a YAML scalar validated like "
             "the file (walk.speed=4, attributes.toe_clearance=0.03, body.height=1.65, "
-            "solver.method=plain-shooting); repeat for several, the last one wins")
+            "solver.method=plain-shooting); repeat for several, the last one wins; walk.steps and "
+            "walk.duration replace each other")
 
 
 def add_set_option(p: argparse.ArgumentParser) -> None:
