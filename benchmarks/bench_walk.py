@@ -17,11 +17,11 @@ It times the kinematics on their own line: the body's 56 angles at 30 fps (``bod
 the multiple-shooting walk), and the walk with its angles (the dynamics plus those) as a
 real-time factor, issue #22's target.
 
-It times the seven plots of a run (``klaw_ocp.io.plots.render_plots`` of the multiple-shooting
+It times the seven plots of a run (``klaw_ocp.figures.plots.render_plots`` of the multiple-shooting
 walk) on their own line: the first rendering in the process (it imports matplotlib) and the median
-of the others; and, apart from the walk, its ``walk.gif`` (``klaw_ocp.io.animation``, docs/gif.md:
+of the others; and, apart from the walk, its ``walk.gif`` (``klaw_ocp.figures.animation``, docs/gif.md:
 rendered and written once, after the plots); and the step-by-step writing of ``klaw-ocp run``
-(``klaw_ocp.io.run_writer``: ms a step, and its cost beyond a one-shot write). Then it runs ``klaw-ocp run CONFIG --no-plots
+(``klaw_ocp.result_files.run_writer``: ms a step, and its cost beyond a one-shot write). Then it runs ``klaw-ocp run CONFIG --no-plots
 --no-animation`` twice as whole processes with an empty kernel cache (the first compiles the
 kernels, the second loads them) and ``klaw-ocp run CONFIG`` with its plots and walk.gif once
 more (``cold_cli_plots_s``; on every processor the benchmark was given, since those are drawn on
@@ -48,7 +48,7 @@ from dataclasses import replace
 
 from klaw_ocp.body_motion import body_motion
 from klaw_ocp.config import load_config
-from klaw_ocp.io import render_walk, write_rendered
+from klaw_ocp.result_files import render_walk, write_rendered
 from klaw_ocp.walk import simulate_walk, walk_spec
 
 MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))
@@ -95,16 +95,16 @@ def _mode(config, method: str, stance: str, repeats: int) -> dict:
 
 
 def _step_writing(config, repeats: int) -> dict:
-    """``klaw-ocp run``'s writing as the walk goes (klaw_ocp.io.run_writer, multiple shooting):
+    """``klaw-ocp run``'s writing as the walk goes (klaw_ocp.result_files.run_writer, multiple shooting):
     the medians of the per-step writing (ms a step), of the rest written at the end (ms), of a
     one-shot render and write of the same walk (ms, the writing before issue #24), and what the
     step-by-step writing costs beyond it (ms a step)."""
-    from klaw_ocp.io.run_writer import RunWriter
+    from klaw_ocp.result_files.run_writer import RunWriter
     spec = walk_spec(config, "multiple-shooting")
     per_step, finish, once, steps = [], [], [], 1
     for _ in range(repeats):
         with tempfile.TemporaryDirectory() as out:
-            writer = RunWriter(out, "resolved: true\n", 30)
+            writer = RunWriter(out, "resolved: true\n")
             walk = simulate_walk(spec, on_step=writer.step)
             t0 = time.perf_counter()
             writer.finish(walk)
@@ -133,10 +133,10 @@ def _median_s(fn, repeats: int) -> float:
 def _plots(walk, repeats: int) -> tuple[float, float]:
     """The seven plots of ``walk`` rendered in memory: the first time (with matplotlib's import) and
     the median of ``repeats`` more (s)."""
-    from klaw_ocp.io import RunData
+    from klaw_ocp.result_files import RunData
     run = RunData.from_walk(walk)
     t0 = time.perf_counter()
-    from klaw_ocp.io.plots import render_plots
+    from klaw_ocp.figures.plots import render_plots
     render_plots(run)
     first = time.perf_counter() - t0
     return first, _median_s(lambda: render_plots(run), repeats)
@@ -145,8 +145,8 @@ def _plots(walk, repeats: int) -> tuple[float, float]:
 def _animation(walk) -> tuple[float, float]:
     """walk.gif of ``walk`` rendered and written once (after the plots: matplotlib is loaded):
     its time (s) and size (MB)."""
-    from klaw_ocp.io import RunData
-    from klaw_ocp.io.animation import GIF_FILE, write_animation
+    from klaw_ocp.result_files import RunData
+    from klaw_ocp.figures.animation import GIF_FILE, write_animation
     run = RunData.from_walk(walk)
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
@@ -165,7 +165,7 @@ def _cold_cli(config_path: str, cache: str, plots: bool = False, cpus=None) -> t
     """Wall time (s) and peak RSS (MB) of one ``klaw-ocp run`` process: without ``plots``, with
     neither plots nor walk.gif; with ``plots``, with both (as a user runs it), on ``cpus`` (the
     processors this benchmark was given: the plots and walk.gif are drawn on every core,
-    klaw_ocp.io.render_pool) rather than on the one this process is pinned to."""
+    klaw_ocp.figures.render_pool) rather than on the one this process is pinned to."""
     env = dict(os.environ, KLAW_OCP_CACHE_DIR=cache)
     with tempfile.TemporaryDirectory() as out:
         command = shutil.which("klaw-ocp") or "klaw-ocp"   # the command users type, as a whole process

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from klaw_ocp.io.run_data import RunData
+from klaw_ocp.result_files.run_data import RunData
 
 
 def tiled(run: RunData, copies: int, name: str | None = None) -> RunData:

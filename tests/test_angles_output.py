@@ -10,7 +10,7 @@ import yaml
 
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
 from klaw_ocp.cli import main
-from klaw_ocp.io.run_data import RunData
+from klaw_ocp.result_files.run_data import RunData
 
 COLUMNS = ["time", "root_x", "root_y", "root_z", *ANGLE_NAMES]
 BODY_PLOTS = {"joint_angles.png", "body.png"}

@@ -10,9 +10,9 @@ import yaml
 from PIL import Image
 
 from klaw_ocp.cli import main
-from klaw_ocp.io.animation import GIF_FILE, GIF_FPS, animation_figure, footprints, write_animation
-from klaw_ocp.io.plot_style import LEG_COLOURS
-from klaw_ocp.io.run_data import RunData
+from klaw_ocp.figures.animation import GIF_FILE, GIF_FPS, animation_figure, footprints, write_animation
+from klaw_ocp.figures.plot_style import LEG_COLOURS
+from klaw_ocp.result_files.run_data import RunData
 
 TITLE_ROWS = 40          # the title and the time counter are above this pixel row
 
@@ -98,7 +98,7 @@ def test_the_gif_rate_is_its_own_whatever_the_angles_rate(run_dir):
 
 
 def test_footprints_lie_on_the_ground_where_each_foot_was_planted(run_dir):
-    from klaw_ocp.io.body_plots import skeleton_at
+    from klaw_ocp.figures.body_plots import skeleton_at
     run = RunData.from_folder(run_dir)
     prints = footprints(run)
     events = run.summary["events"]
@@ -155,13 +155,13 @@ def test_plot_redraws_the_gif_from_the_results_folder_without_solving(run_dir, t
 
 def test_the_gif_is_written_atomically(run_dir, tmp_path, monkeypatch):
     """A failure while writing leaves the previous walk.gif as it was and no temporary file."""
-    import klaw_ocp.io.writers as writers                  # the GIF is renamed into place there (atomic_path)
+    import klaw_ocp.result_files.atomic as atomic    # the GIF is renamed into place there (atomic_path)
     target = tmp_path / GIF_FILE
     target.write_bytes(b"the previous walk.gif")
 
     def broken_replace(src, dst):
         raise OSError("disk full")
-    monkeypatch.setattr(writers.os, "replace", broken_replace)
+    monkeypatch.setattr(atomic.os, "replace", broken_replace)
     with pytest.raises(OSError, match="disk full"):
         write_animation(RunData.from_folder(run_dir), target)
     assert target.read_bytes() == b"the previous walk.gif"
@@ -179,7 +179,7 @@ def test_no_body_no_gif(run_dir, tmp_path):
 def test_frames_go_to_the_file_as_they_are_drawn_and_decode_as_given():
     """GifStream writes each frame when the next one comes: it holds two, whatever the length."""
     import io
-    from klaw_ocp.io.gif_file import GifStream
+    from klaw_ocp.figures.gif_file import GifStream
     frames = []
     for x in (0, 4, 8, 8, 12, 16):               # a square moving right, standing still once
         frame = np.full((30, 40, 4), 255, np.uint8)
@@ -211,7 +211,7 @@ def test_frames_go_to_the_file_as_they_are_drawn_and_decode_as_given():
 
 
 def test_write_animation_streams_the_frames_into_its_temporary_file(run_dir, tmp_path, monkeypatch):
-    import klaw_ocp.io.animation as animation
+    import klaw_ocp.figures.animation as animation
     original = animation.animation_figure
     sizes = []
 
@@ -231,8 +231,8 @@ def test_write_animation_streams_the_frames_into_its_temporary_file(run_dir, tmp
 
 
 def test_poses_and_labels_in_chunks_give_the_same_gif(run_dir, tmp_path, monkeypatch):
-    import klaw_ocp.io.animation as animation
-    from klaw_ocp.io.gif_pixels import MovingLabels
+    import klaw_ocp.figures.animation as animation
+    from klaw_ocp.figures.gif_pixels import MovingLabels
     run = RunData.from_folder(run_dir)
     write_animation(run, tmp_path / "whole.gif")
     monkeypatch.setattr(animation, "POSE_CHUNK", 4)
@@ -246,7 +246,7 @@ def test_a_frame_of_a_long_walk_draws_only_what_its_views_show():
     those about the walker, so that a frame costs the same at any length of walk."""
     from pathlib import Path
     from _long_walks import tiled
-    from klaw_ocp.io.animation import POSE_CHUNK
+    from klaw_ocp.figures.animation import POSE_CHUNK
     from klaw_ocp.walk import simulate_walk
     natural = RunData.from_walk(simulate_walk(Path(__file__).resolve().parents[1] / "configs" / "natural_walk.yaml"))
     long = tiled(natural, 9)

@@ -22,8 +22,8 @@ from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.dynamics import stance_hips
 from klaw_ocp.dynamics.points import foot_points_arrays, foot_points_float
 from klaw_ocp.gait import LocomotionAttributes, stance_leg
-from klaw_ocp.io.run_data import RunData
-from klaw_ocp.io.writers import angles_csv
+from klaw_ocp.result_files.run_data import RunData
+from klaw_ocp.result_files.tables import angles_csv
 from klaw_ocp.kinematics.leg_geometry import leg_ik
 from klaw_ocp.kinematics.virtual_leg import hind_foot_at_rest
 from klaw_ocp.walk import simulate_walk, walk_spec

@@ -1,5 +1,5 @@
 """walk.bvh (docs/animation.md): the 37-joint skeleton in the one token layout Blender's importer
-reads, read back by an independent reader (bvhio) and by our own (klaw_ocp.io.bvh.read_bvh), whose
+reads, read back by an independent reader (bvhio) and by our own (klaw_ocp.result_files.bvh.read_bvh), whose
 forward kinematics reproduce the skeleton's joint positions; and, where Blender is installed,
 imported into Blender headless (tests/blender_import_check.py)."""
 import math
@@ -15,9 +15,10 @@ import pytest
 
 from klaw_ocp.body import Body
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, JOINTS, forward_kinematics
-from klaw_ocp.io.bvh import AXES, BVH_FILE, Bvh, bvh_text, read_bvh, write_bvh
-from klaw_ocp.io.run_data import RunData
-from klaw_ocp.io.writers import events_csv, render_run, write_rendered
+from klaw_ocp.result_files.bvh import AXES, BVH_FILE, Bvh, bvh_text, read_bvh, write_bvh
+from klaw_ocp.result_files.run_data import RunData
+from klaw_ocp.result_files import render_run, write_rendered
+from klaw_ocp.result_files.tables import events_csv
 
 FPS = 30.0
 CONFIG = {"name": "t", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": 3}}
@@ -113,11 +114,20 @@ def test_a_frame_rate_the_times_contradict_is_refused(motion):
         bvh_text(motion, BODY, fps=12.5)
     table = motion.table()
     table["time"] = table["time"] * 30 / 12.5            # the same frames at 12.5 fps
-    line = next(l for l in bvh_text(table, BODY).splitlines() if l.startswith("Frame Time:"))
+    line = next(l for l in bvh_text(table, BODY, 12.5).splitlines() if l.startswith("Frame Time:"))
     assert float(line.split()[2]) == 0.08 and significant_digits(line.split()[2]) >= 10
     uneven = dict(table, time=table["time"] + np.where(np.arange(len(table["time"])) == 5, 0.01, 0.0))
     with pytest.raises(ValueError, match="frame 5"):
-        bvh_text(uneven, BODY)
+        bvh_text(uneven, BODY, 12.5)
+
+
+def test_the_frame_rate_is_the_runs_never_one_guessed_from_the_times(walk, motion):
+    # a RunData carries the rate it was built at; a table or a BodyMotion has none, so it is asked for
+    run = RunData.from_walk(walk, fps=12.5)
+    assert run.fps == 12.5
+    assert "Frame Time: 0.080000000000000002\n" in bvh_text(run)
+    with pytest.raises(ValueError, match="fps: required"):
+        bvh_text(motion, BODY)
 
 
 # -- read back: bvhio and ours ----------------------------------------------------------------------
@@ -173,7 +183,7 @@ def test_every_angle_maps_onto_its_bvh_channel():
              "root_z": rng.uniform(-0.1, 0.1, n)}
     table.update({name: rng.uniform(-40, 40, n) for name in ANGLE_NAMES})
     expected, ends = skeleton_in_bvh_axes(table)
-    positions, end_sites = read_bvh(bvh_text(table, BODY)).forward_kinematics()
+    positions, end_sites = read_bvh(bvh_text(table, BODY, FPS)).forward_kinematics()
     np.testing.assert_allclose(positions, expected, atol=1e-6, rtol=0)
     for leaf in LEAVES:
         np.testing.assert_allclose(end_sites[leaf], ends[leaf], atol=1e-6, rtol=0, err_msg=leaf)
@@ -181,7 +191,7 @@ def test_every_angle_maps_onto_its_bvh_channel():
     for name in ANGLE_NAMES:
         one = {c: np.zeros(1) for c in table}
         one[name] = np.array([10.0])
-        values = np.array(bvh_text(one, BODY).splitlines()[-1].split(), dtype=float)
+        values = np.array(bvh_text(one, BODY, FPS).splitlines()[-1].split(), dtype=float)
         assert np.count_nonzero(values) == 1, name
 
 
@@ -203,7 +213,8 @@ def test_a_finished_runs_folder_gives_the_same_file(walk, written, tmp_path):
     out = tmp_path / "run"
     write_rendered(render_run(run), out)
     from_folder = RunData.from_folder(out)
-    path = write_bvh(out / BVH_FILE, from_folder)             # the body from summary.json, fps from the times
+    assert from_folder.fps == FPS
+    path = write_bvh(out / BVH_FILE, from_folder)             # the body and fps from summary.json
     assert path == out / BVH_FILE
     assert bvh_text(run, fps=FPS) == written.read_text(encoding="utf-8")
     # the folder's angles.csv keeps 12 significant digits: the same file to its last decimal or so
@@ -222,11 +233,11 @@ def test_a_finished_runs_folder_gives_the_same_file(walk, written, tmp_path):
 def test_bad_inputs_are_refused_in_one_line(motion):
     table = motion.table()
     with pytest.raises(ValueError, match="body: required"):
-        bvh_text(table)
+        bvh_text(table, fps=FPS)
     with pytest.raises(ValueError, match="missing column"):
-        bvh_text({k: v for k, v in table.items() if k != "r_knee_flexion"}, BODY)
+        bvh_text({k: v for k, v in table.items() if k != "r_knee_flexion"}, BODY, FPS)
     with pytest.raises(ValueError, match="NaN"):
-        bvh_text(dict(table, r_knee_flexion=np.full(len(table["time"]), np.nan)), BODY)
+        bvh_text(dict(table, r_knee_flexion=np.full(len(table["time"]), np.nan)), BODY, FPS)
     with pytest.raises(ValueError, match="no angles"):
         bvh_text(RunData(name="old", summary={"body": {"height": 1.8, "mass": 80}}, table={}))
     with pytest.raises(ValueError, match="fps"):

@@ -184,7 +184,7 @@ def test_compare_one_config_runs_both_modes_and_matches_two_separate_runs(short_
             assert float(row[column]) == pytest.approx(b[param] - a[param], rel=1e-9, abs=1e-12)
     # and the hip-height difference of the two separate runs
     from klaw_ocp.compare import comparison_stats
-    from klaw_ocp.io import RunData
+    from klaw_ocp.result_files import RunData
     separate = comparison_stats([RunData.from_folder(tmp_path / m) for m in ("multiple-shooting", "plain-shooting")])
     inside = comparison_stats([RunData.from_folder(p) for p in sorted((out / "runs").iterdir())])
     assert inside["runs"][1]["hip_y"]["value"] == pytest.approx(separate["runs"][1]["hip_y"]["value"], rel=1e-9, abs=1e-15)

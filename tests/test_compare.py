@@ -1,4 +1,4 @@
-"""Comparing finished runs (klaw_ocp.compare, klaw_ocp.io.compare_plot): rows, statistics, figure.
+"""Comparing finished runs (klaw_ocp.compare, klaw_ocp.figures.compare_plot): rows, statistics, figure.
 
 The natural walk is simulated once in each solver mode; the rows and statistics are checked
 against the two walks' own results, computed here independently of klaw_ocp.compare.
@@ -14,8 +14,8 @@ import pytest
 
 from klaw_ocp.compare import (SUBPHASES, comparison_csv, comparison_rows, comparison_stats, comparison_table,
                               unique_labels)
-from klaw_ocp.io import write_walk
-from klaw_ocp.io.run_data import RunData
+from klaw_ocp.result_files import write_walk
+from klaw_ocp.result_files.run_data import RunData
 from klaw_ocp.walk import simulate_walk
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -162,15 +162,15 @@ def test_different_configs_compare_with_unmatched_steps_left_empty(short_long):
 def test_figure_renders_a_non_blank_png(pair, runs, short_long):
     import matplotlib.image as mpimg
 
-    from klaw_ocp.io.compare_plot import comparison_figure
-    from klaw_ocp.io.plot_style import png_bytes
+    from klaw_ocp.figures.compare_plot import comparison_figure
+    from klaw_ocp.figures.plot_style import png_bytes
     image = mpimg.imread(io.BytesIO(png_bytes(comparison_figure(runs if pair == "modes" else short_long))), format="png")
     assert image.ndim == 3 and image.shape[0] > 1000 and image.shape[1] > 1000
     assert float(image[..., :3].std()) > 0.05                       # not a blank page
 
 
 def test_comparison_imports_no_solver():
-    code = ("import sys, klaw_ocp.compare, klaw_ocp.io.compare_plot; "
+    code = ("import sys, klaw_ocp.compare, klaw_ocp.figures.compare_plot; "
             "print(any(m.startswith('klaw_ocp.solvers') for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -1,6 +1,6 @@
 """Failure loses nothing, and the same config gives the same files (issue #24, parts 2 and 4).
 
-- A run writes each step as it completes (klaw_ocp.io.run_writer): dynamics.csv and events.csv
+- A run writes each step as it completes (klaw_ocp.result_files.run_writer): dynamics.csv and events.csv
   grow, summary.json is rewritten; the final files are the bytes a one-shot render gives.
 - A solver failure: one line with the step, the subphase, the residual and the real cause, exit 3,
   every completed step on disk; Ctrl-C: one line, exit 130, summary.json "interrupted", every
@@ -64,12 +64,12 @@ def test_each_step_is_on_disk_as_it_completes(tmp_path):
     summary.json (status running) every completed step; at the end the files are the bytes of
     a one-shot render of the same walk."""
     from klaw_ocp.config import load_config
-    from klaw_ocp.io import render_walk
-    from klaw_ocp.io.run_writer import RunWriter
+    from klaw_ocp.result_files import render_walk
+    from klaw_ocp.result_files.run_writer import RunWriter
     from klaw_ocp.walk import simulate_walk, walk_spec
 
     config = load_config(_config(tmp_path, walk={"steps": 3, "start_from_rest": True}))
-    writer = RunWriter(tmp_path / "o", "resolved: true\n", 30)
+    writer = RunWriter(tmp_path / "o", "resolved: true\n")
     seen = []
 
     def on_step(walk):
@@ -85,7 +85,7 @@ def test_each_step_is_on_disk_as_it_completes(tmp_path):
     walk = simulate_walk(walk_spec(config), on_step=on_step)
     assert seen == [1, 2, 3]
     writer.finish(walk)
-    whole = render_walk(walk, 30)
+    whole = render_walk(walk)          # at the walk's own fps, as the writer
     for name in ("dynamics", "summary", "events", "angles", "bvh", "mot"):
         filename, data = whole[name]
         assert (tmp_path / "o" / filename).read_bytes() == data, filename
@@ -93,8 +93,8 @@ def test_each_step_is_on_disk_as_it_completes(tmp_path):
 
 def test_an_append_cut_short_is_overwritten(tmp_path, short_config):
     from klaw_ocp.config import load_config
-    from klaw_ocp.io import render_walk
-    from klaw_ocp.io.run_writer import RunWriter
+    from klaw_ocp.result_files import render_walk
+    from klaw_ocp.result_files.run_writer import RunWriter
     from klaw_ocp.walk import simulate_walk, walk_spec
 
     writer = RunWriter(tmp_path / "o")

@@ -8,7 +8,7 @@ import pytest
 
 from klaw_ocp.body import Body
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics, rest_root_position
-from klaw_ocp.io.opensim import (MOT_COLUMNS, MODEL_PELVIS_HEIGHT, mot_columns, mot_text,
+from klaw_ocp.result_files.opensim import (MOT_COLUMNS, MODEL_PELVIS_HEIGHT, mot_columns, mot_text,
                                  translation_scale, write_mot)
 
 BODY = Body(1.8, 80)
@@ -288,8 +288,8 @@ def test_a_walk_written_and_read_back_is_its_mapping(walk_table, tmp_path):
 
 def test_angles_csv_read_back_gives_the_same_file(walk_table, tmp_path):
     """What `klaw-ocp plot` reads (RunData's angles.csv) maps as the walk in memory does."""
-    from klaw_ocp.io.run_data import read_table
-    from klaw_ocp.io.writers import angles_csv
+    from klaw_ocp.result_files.run_data import read_table
+    from klaw_ocp.result_files.tables import angles_csv
     body, table = walk_table
     (tmp_path / "angles.csv").write_text(angles_csv(table), encoding="utf-8")
     read = mot_columns(read_table(tmp_path / "angles.csv"), body)

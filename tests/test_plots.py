@@ -1,4 +1,4 @@
-"""The plots of a run (klaw_ocp.io.plots, gait_diagram, strobe, body_plots): they render readable PNGs,
+"""The plots of a run (klaw_ocp.figures.plots, gait_diagram, strobe, body_plots): they render readable PNGs,
 the gait diagram's bars are the summary's state-phase timings (§3, eq. 2, figure 3), the strobe is
 the dynamic model's geometry (figure 2, figure 8), and plotting never imports a solver."""
 import io
@@ -13,11 +13,13 @@ import pytest
 
 from klaw_ocp.config import load_config
 from klaw_ocp.errors import ConfigError
-from klaw_ocp.io import RunData, write_walk
-from klaw_ocp.io.gait_diagram import gait_bars, gait_events, representative_step, walk_end
-from klaw_ocp.io.plot_style import DPI, LEG_COLOURS, encode_png, png_bytes
-from klaw_ocp.io.plots import PLOTS, boundaries, render_plots, subphase_lines, swing2_recoveries
-from klaw_ocp.io.strobe import draw_posture, draw_strobe, legs_figure, pose_points, sample_at, strobe_rows
+from klaw_ocp.result_files import RunData, write_walk
+from klaw_ocp.figures.gait_diagram import gait_bars, gait_events, representative_step, walk_end
+from klaw_ocp.figures.plot_style import DPI, LEG_COLOURS, encode_png, png_bytes
+from klaw_ocp.figures.plots import boundaries, render_plots, subphase_lines, swing2_recoveries
+from klaw_ocp.figures.registry import PLOTS
+from klaw_ocp.result_files.registry import load
+from klaw_ocp.figures.strobe import draw_posture, draw_strobe, legs_figure, pose_points, sample_at, strobe_rows
 from klaw_ocp.gait import stance_leg
 from klaw_ocp.walk import simulate_walk
 
@@ -60,6 +62,11 @@ def run(request):
     return request.getfixturevalue(request.param)
 
 
+def _figure(name: str):
+    """The figure function the registry names for plot ``name``."""
+    return load(PLOTS[name].figure)
+
+
 def _decode(png: bytes) -> np.ndarray:
     return mpimg.imread(io.BytesIO(png), format="png")
 
@@ -67,9 +74,8 @@ def _decode(png: bytes) -> np.ndarray:
 # -- every plot renders ------------------------------------------------------------------------
 @pytest.mark.parametrize("name", list(PLOTS))
 def test_every_plot_renders_a_png_of_its_figure_size_that_is_not_blank(run, name):
-    filename, figure = PLOTS[name]
-    assert filename == f"{name}.png"
-    fig = figure(run)
+    assert PLOTS[name].file == f"{name}.png"
+    fig = _figure(name)(run)
     width, height = fig.get_size_inches() * DPI
     image = _decode(png_bytes(fig))
     assert abs(image.shape[0] - height) < 1 and abs(image.shape[1] - width) < 1   # Agg truncates
@@ -103,8 +109,8 @@ def test_a_results_folder_gives_the_same_plots_as_the_walk(start_stop_walk, star
 def test_a_run_without_steps_renders_a_note_not_an_error(natural):
     empty = RunData(name="nothing", summary={"steps": [], "body": natural.body},
                     table={c: np.array([]) for c in natural.table})
-    for name, (_, figure) in PLOTS.items():
-        assert _decode(png_bytes(figure(empty))).shape[0] > 100, name
+    for name in PLOTS:
+        assert _decode(png_bytes(_figure(name)(empty))).shape[0] > 100, name
 
 
 def test_encode_png_is_lossless():
@@ -113,7 +119,7 @@ def test_encode_png_is_lossless():
 
 
 def test_plotting_imports_no_solver():
-    code = "import sys, klaw_ocp.io.plots; print(any(m.startswith('klaw_ocp.solvers') for m in sys.modules))"
+    code = "import sys, klaw_ocp.figures.plots; print(any(m.startswith('klaw_ocp.solvers') for m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
     assert out.stdout.strip() == "False"
 
@@ -247,7 +253,7 @@ def test_strobe_rows_keep_every_heel_strike_and_the_window(natural):
 
 
 def test_one_leg_strobe_draws_only_that_leg(start_stop):
-    from klaw_ocp.io.plot_style import new_figure
+    from klaw_ocp.figures.plot_style import new_figure
     fig = new_figure(6, 3)
     ax = fig.add_subplot()
     draw_strobe(ax, start_stop, legs=("right",))
@@ -261,7 +267,7 @@ def test_one_leg_strobe_draws_only_that_leg(start_stop):
 
 
 def test_posture_at_a_heel_strike_is_the_new_steps_first_sample(natural):
-    from klaw_ocp.io.plot_style import new_figure
+    from klaw_ocp.figures.plot_style import new_figure
     k = 5
     t = natural.steps[k]["t_start_s"]
     row = sample_at(natural, t)
@@ -298,7 +304,7 @@ def long_run(natural):
 
 
 def test_a_walk_of_up_to_60_steps_is_drawn_whole_a_longer_one_its_first_40_and_last_10():
-    from klaw_ocp.io.plot_style import drawn_note, drawn_steps
+    from klaw_ocp.figures.plot_style import drawn_note, drawn_steps
     assert drawn_steps(22) == [(0, 21)] and drawn_steps(60) == [(0, 59)] and drawn_note(60) == ""
     assert drawn_steps(61) == [(0, 39), (51, 60)] and drawn_steps(1000) == [(0, 39), (990, 999)]
     assert "steps 0–39 and 990–999 of 1000 drawn, 40–989 left out" in drawn_note(1000)
@@ -306,7 +312,7 @@ def test_a_walk_of_up_to_60_steps_is_drawn_whole_a_longer_one_its_first_40_and_l
 
 @pytest.mark.parametrize("name", ["hip_height", "torques", "states", "gait_diagram"])
 def test_a_long_walks_time_plots_draw_its_first_and_last_steps_and_say_so(natural, long_run, name):
-    fig = PLOTS[name][1](long_run)
+    fig = _figure(name)(long_run)
     steps = long_run.steps
     first_end = steps[39]["t_start_s"] + steps[39]["t_step_s"]
     last_start, end = steps[-10]["t_start_s"], walk_end(long_run)
@@ -321,7 +327,7 @@ def test_a_long_walks_time_plots_draw_its_first_and_last_steps_and_say_so(natura
     assert a0 == pytest.approx(0.0, abs=0.5) and a1 == pytest.approx(first_end, abs=0.5)
     assert b0 == pytest.approx(last_start, abs=0.5) and b1 == pytest.approx(end, abs=0.5)
     # a short walk has one time axis per row and no note
-    short = PLOTS[name][1](natural)
+    short = _figure(name)(natural)
     assert not any("long walk" in t for t in [short._suptitle.get_text() if short._suptitle else ""]
                    + [ax.get_title(loc="left") for ax in short.axes])
 
@@ -352,7 +358,7 @@ def test_a_long_walk_renders_every_plot(long_run):
 @pytest.mark.parametrize("methods", [("multiple-shooting",), ("multiple-shooting", "plain-shooting")])
 def test_the_sweep_legend_lies_inside_the_figure(methods):
     """sweep.png's legend was cut at both edges of a one-method (one-panel) figure."""
-    from klaw_ocp.io.sweep_plot import sweep_figure
+    from klaw_ocp.figures.sweep_plot import sweep_figure
     rows = [{"method": m, "walk.speed": v, "status": "ok" if v != 3 else "failed", "wall_s": 0.3 * v,
              "failed_step": 2, "failed_subphase": "swing2"} for m in methods for v in (1, 3, 5)]
     fig = sweep_figure(rows, ["walk.speed"], "natural_walk")

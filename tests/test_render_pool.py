@@ -1,14 +1,15 @@
-"""The plots and walk.gif drawn on several cores (klaw_ocp.io.render_pool): the same files as drawn
+"""The plots and walk.gif drawn on several cores (klaw_ocp.figures.render_pool): the same files as drawn
 one after the other in this process, written where they were, and a pool that cannot be used
 only means drawing here."""
 import pytest
 import yaml
 from PIL import Image
 
-from klaw_ocp.io import RunData
-from klaw_ocp.io import render_pool
-from klaw_ocp.io.animation import GIF_FILE, write_animation
-from klaw_ocp.io.plots import PLOTS, render_plots
+from klaw_ocp.figures import render_pool
+from klaw_ocp.figures.animation import GIF_FILE, write_animation
+from klaw_ocp.figures.plots import render_plots
+from klaw_ocp.figures.registry import PLOTS
+from klaw_ocp.result_files import RunData
 from klaw_ocp.walk import simulate_walk
 
 
@@ -21,9 +22,11 @@ def run(tmp_path_factory):
     return RunData.from_walk(simulate_walk(path))
 
 
-def test_the_plot_names_are_those_of_plots():
-    assert render_pool.PLOT_NAMES == tuple(PLOTS)
-    assert set(render_pool.COST_ORDER) == set(PLOTS) | {render_pool.GIF_TASK}
+def test_the_pool_draws_every_plot_of_the_registry_and_the_gif_the_longest_first():
+    from klaw_ocp.figures.registry import GIF_TASK, cost_order
+    order = cost_order()
+    assert set(order) == set(PLOTS) | {GIF_TASK} and len(order) == len(PLOTS) + 1
+    assert order[0] == GIF_TASK and order[1] == "body"          # walk.gif, then the skeleton, take longest
 
 
 def test_drawn_in_parallel_or_here_the_files_are_the_same(run, tmp_path, monkeypatch):

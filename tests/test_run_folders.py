@@ -1,6 +1,6 @@
 """Safe results folders (issue #24, part 3): a run never mixes with an earlier one and never
 destroys one by failing; a folder klaw-ocp did not write is refused without --force; the same
-for compare, sweep and reproduce (klaw_ocp.io.results_folder)."""
+for compare, sweep and reproduce (klaw_ocp.result_files.results_folder)."""
 import json
 from pathlib import Path
 
@@ -8,7 +8,7 @@ import pytest
 
 from klaw_ocp.cli import main
 from klaw_ocp.errors import ConvergenceError
-from klaw_ocp.io.results_folder import MARKER, inspect_folder, read_marker
+from klaw_ocp.result_files.results_folder import MARKER, inspect_folder, read_marker
 
 
 def _snapshot(folder: Path) -> dict:

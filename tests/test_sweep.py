@@ -265,7 +265,7 @@ def test_map_with_three_paths_and_categories(tmp_path, monkeypatch):
     from matplotlib import colormaps
     from matplotlib.colors import to_rgb
 
-    from klaw_ocp.io import sweep_plot
+    from klaw_ocp.figures import sweep_plot
     rows = [{"walk.speed": v, "walk.start_from_rest": r, "body.height": h, "method": m,
              "status": "failed" if (v, r, h) == (3, True, 1.7) else "ok", "wall_s": v + (1.5 if h == 1.8 else 1.0),
              "failed_step": 0, "failed_subphase": "stance"}

@@ -151,7 +151,7 @@ def test_events_have_every_heel_strike_and_toe_off_of_both_legs(walk_kind):
     """events.csv's rows (results.foot_events): heel strikes alternate, the right leg first; each
     toe-off is t_ds after the other leg's heel strike; every stance has its foot-flat and heel-off
     between its heel strike and its toe-off; times in order."""
-    from klaw_ocp.io.writers import events_csv
+    from klaw_ocp.result_files.tables import events_csv
     from klaw_ocp.results import walk_summary
     walk = simulate_walk({"name": "e", "body": {"height": 1.8, "mass": 80}, "walk": WALKS[walk_kind]})
     rows = [line.split(",") for line in events_csv(walk_summary(walk)).splitlines()]

@@ -1,5 +1,6 @@
 """Result files are written atomically with the user's normal file mode; summary.json is the json
-module's; dynamics.csv, written out for speed, is what the csv module writes."""
+module's; dynamics.csv, one format per row, is what the csv module writes; walk.bvh's and
+walk.mot's rows are each value's fixed-decimal format, never "-0"."""
 import csv
 import io
 import json
@@ -10,7 +11,9 @@ import numpy as np
 import pytest
 
 
-from klaw_ocp.io.writers import atomic_write_bytes, atomic_write_text, dynamics_csv, summary_text
+from klaw_ocp.result_files.atomic import atomic_write_bytes, atomic_write_text
+from klaw_ocp.result_files.summary_json import summary_text
+from klaw_ocp.result_files.tables import decimal_rows, dynamics_csv
 from klaw_ocp.results import COLUMNS
 
 
@@ -49,6 +52,13 @@ def test_dynamics_csv_is_what_the_csv_module_writes():
     writer.writerows(zip(*[table[c].tolist() if c == "subphase" else [int(v) for v in table[c]] if c == "step"
                            else [repr(v) for v in table[c].tolist()] for c in COLUMNS]))
     assert dynamics_csv(None, table) == buffer.getvalue()
+
+
+def test_decimal_rows_round_first_and_write_no_minus_zero():
+    values = np.array([[-1e-12, 0.1234567891234], [2.5, -3.0]])
+    assert decimal_rows(values, 9, " ") == "0.000000000 0.123456789\n2.500000000 -3.000000000\n"
+    assert decimal_rows(np.array([[1e7, -0.5], [np.inf, 1.0]]), 2, "\t") == "10000000.00\t-0.50\ninf\t1.00\n"
+    assert decimal_rows(np.zeros((0, 3)), 9, " ") == ""
 
 
 @pytest.mark.parametrize("x", [np.array([0.0, 0.1]), np.linspace(0.2, 0.6, 9), 0.3 + np.arange(7) * 0.01,

@@ -1,6 +1,6 @@
 """Comparing finished runs: the same walk in both solver modes, or two different walks.
 
-Pure functions over :class:`~klaw_ocp.io.run_data.RunData` (a finished run read from memory or
+Pure functions over :class:`~klaw_ocp.result_files.run_data.RunData` (a finished run read from memory or
 from a results folder); nothing here solves, reads YAML or imports a solver. The first run is the
 reference; every other run is compared with it.
 
@@ -38,7 +38,7 @@ ANGLE_COLUMNS = {"w": "m", "theta1": "rad", "theta2": "rad", "theta3": "rad", "t
 
 # -- labels and parameters ---------------------------------------------------------------------------
 def unique_labels(runs) -> list[str]:
-    """Each run's :attr:`~klaw_ocp.io.run_data.RunData.label`; a label that occurs more than once
+    """Each run's :attr:`~klaw_ocp.result_files.run_data.RunData.label`; a label that occurs more than once
     gets ``#2``, ``#3``, ... on its second, third, ... occurrence."""
     seen: Counter = Counter()
     labels = []

@@ -56,7 +56,7 @@ def check_configs(configs_dir) -> dict[str, Path]:
 def _walk(path: Path, method: str = choices.MULTIPLE_SHOOTING, progress: bool = False):
     """One walk and its CPU and wall time; a walk that does not converge stops the reproduction
     (its message names step, subphase and residual)."""
-    from .io import RunData
+    from .result_files import RunData
     from .walk import simulate_walk
     cpu0, wall0 = time.process_time(), time.perf_counter()
     try:
@@ -261,11 +261,12 @@ def readme(n: dict, comparison_text: str) -> str:
 def reproduce(configs_dir="configs", out_dir="results/paper", progress: bool = False) -> dict:
     """Solve every walk, draw every figure and write ``out_dir``; returns name -> path."""
     from .compare import comparison_csv, comparison_rows, comparison_stats, comparison_table
-    from .io import atomic_write_text, write_rendered
-    from .io.compare_plot import comparison_figure
-    from .io.paper_figures import acceleration_figure, fig8_figure, fig10_figure
-    from .io.plots import PLOTS
-    from .io.plot_style import png_bytes
+    from .figures.compare_plot import comparison_figure
+    from .figures.paper_figures import acceleration_figure, fig8_figure, fig10_figure
+    from .figures.plot_style import png_bytes
+    from .figures.registry import PLOTS
+    from .result_files.atomic import atomic_write_text, write_rendered
+    from .result_files.registry import COMPARISON_CSV, COMPARISON_PNG, NUMBERS_JSON, PAPER_README, load
 
     paths = check_configs(configs_dir)
     runs = solve_all(paths, progress)
@@ -276,14 +277,14 @@ def reproduce(configs_dir="configs", out_dir="results/paper", progress: bool = F
         "fig8": ("fig8.png", png_bytes(fig8_figure(runs["fig8_2kmh"], runs["fig8_5kmh"]))),
         "fig10": ("fig10.png", png_bytes(fig10_figure([runs["natural"], runs["short"], runs["long"]], PAPER))),
         "acceleration": ("acceleration.png", png_bytes(acceleration_figure(runs["accelerate"]))),
-        "comparison": ("comparison.png", png_bytes(comparison_figure(modes))),
-        "comparison_csv": ("comparison.csv", comparison_csv(comparison_rows(modes)).encode("utf-8")),
-        "numbers": ("numbers.json", (json.dumps(n, indent=2, allow_nan=False) + "\n").encode("utf-8")),
+        "comparison": (COMPARISON_PNG, png_bytes(comparison_figure(modes))),
+        "comparison_csv": (COMPARISON_CSV, comparison_csv(comparison_rows(modes)).encode("utf-8")),
+        "numbers": (NUMBERS_JSON, (json.dumps(n, indent=2, allow_nan=False) + "\n").encode("utf-8")),
     }
     for name in ("hip_height", "gait_diagram"):
-        filename, figure = PLOTS[name]
-        files[f"natural_{name}"] = (f"natural_{filename}", png_bytes(figure(runs["natural"])))
+        plot = PLOTS[name]
+        files[f"natural_{name}"] = (f"natural_{plot.file}", png_bytes(load(plot.figure)(runs["natural"])))
     written = write_rendered(files, out_dir)
-    written["readme"] = Path(out_dir) / "README.md"
+    written["readme"] = Path(out_dir) / PAPER_README
     atomic_write_text(written["readme"], readme(n, comparison))
     return written

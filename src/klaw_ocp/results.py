@@ -295,6 +295,8 @@ def summary_of(walk, steps: list, mean_hip_speed_kmh) -> dict:
         "solver": {"intervals": spec.intervals, "tolerance": spec.tolerance, "nlp": spec.nlp,
                    "lock_rule": spec.lock_rule, "stance": spec.stance},
         "body": spec.body.as_dict(), "attributes": spec.attributes.as_dict(),
+        # the frame rate of angles.csv, walk.bvh and walk.mot (output.fps), for a reader of the folder
+        "fps": float(spec.fps),
         # wall_s is the walk's own time; compile_s the one-off compiling of the solver kernels
         # that a first walk on a machine adds (0.0 with them cached), left out of wall_s and so
         # of the real-time factor

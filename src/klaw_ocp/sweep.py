@@ -15,7 +15,7 @@ One walk that does not converge never stops the sweep: its row has ``status`` "f
 names the failing step, subphase and residual; any other exception gives ``status`` "error"
 and its one-line message. :func:`write_sweep` writes ``sweep.csv`` (columns:
 :data:`RESULT_COLUMNS` after one column per varied path) and the map ``sweep.png``
-(:mod:`klaw_ocp.io.sweep_plot`). docs/sweep.md has the user's view.
+(:mod:`klaw_ocp.figures.sweep_plot`). docs/sweep.md has the user's view.
 The `--vary` values are parsed by :mod:`klaw_ocp.config_paths` (the syntax `--set` shares).
 """
 from __future__ import annotations
@@ -348,11 +348,12 @@ def sweep_csv(rows: list[dict], varied_paths: list[str], header: bool = True) ->
 
 def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = None) -> dict[str, Path]:
     """Write ``sweep.csv`` and ``sweep.png`` into ``out_dir`` (atomically); returns name -> path."""
-    from .io.sweep_plot import write_sweep_png
-    from .io.writers import atomic_write_text
+    from .figures.sweep_plot import write_sweep_png
+    from .result_files.atomic import atomic_write_text
+    from .result_files.registry import SWEEP_CSV, SWEEP_PNG
 
     out = Path(out_dir)
-    paths = {"csv": out / "sweep.csv", "png": out / "sweep.png"}
+    paths = {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}
     atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
     write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
     return paths
@@ -368,7 +369,7 @@ def append_sweep_row(path, row: dict, varied_paths) -> None:
     line being written, never an earlier one). The lines are in the order the walks finished;
     ``klaw-ocp sweep`` writes the file again, atomically and in grid order, when the sweep ends
     (:func:`write_sweep`) or is interrupted."""
-    from .io.writers import atomic_write_text
+    from .result_files.atomic import atomic_write_text
 
     path = Path(path)
     if not path.is_file():

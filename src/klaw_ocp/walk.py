@@ -25,6 +25,7 @@ import numpy as np
 
 from . import choices
 from .body import Body
+from .config import DEFAULT_FPS
 from .console import CasadiMessages, DeferredInterrupt
 from .control.gains import control_gains
 from .control.step import StepController, StepInput, StepResult
@@ -51,6 +52,8 @@ class WalkSpec:
     end_at_rest: bool = False
     lock_rule: str = choices.DEFAULT_LOCK_RULE
     stance: str = choices.DEFAULT_STANCE
+    #: frames per second of the body's files (output.fps): the walk carries it to every writer
+    fps: float = DEFAULT_FPS
 
 
 @dataclass
@@ -254,7 +257,7 @@ def _checked_spec(spec, method, progress, raise_on_failure) -> WalkSpec:
     a :class:`WalkSpec` within the config's bounds, or one ConfigError line naming the argument."""
     import os
 
-    from .config import (INTERVALS_RANGE, ITERATIONS_RANGE, LOCK_RULES, NLP_CHOICES, SOLVER_METHODS,
+    from .config import (INTERVALS_RANGE, ITERATIONS_RANGE, LOCK_RULES, MAX_FPS, NLP_CHOICES, SOLVER_METHODS,
                          STANCES, TOLERANCE_RANGE, ExperimentConfig, check_stance_method,
                          check_walk_size, load_config)
     from .errors import ConfigError, out_of_range
@@ -311,6 +314,7 @@ def _checked_spec(spec, method, progress, raise_on_failure) -> WalkSpec:
     choice("nlp", NLP_CHOICES)
     choice("stance", STANCES)
     choice("lock_rule", LOCK_RULES)
+    need("fps", number(spec.fps) and 0 < spec.fps <= MAX_FPS, spec.fps, f"a number > 0 and <= {MAX_FPS:g}")
     for flag in ("start_from_rest", "end_at_rest"):
         need(flag, isinstance(getattr(spec, flag), (bool, np.bool_)), getattr(spec, flag), "True or False")
     check_walk_size(len(spec.plans), int(spec.intervals))
@@ -344,4 +348,4 @@ def walk_spec(config, method: str | None = None) -> WalkSpec:
                     plans=config.plan(), method=method or solver.method, intervals=solver.intervals,
                     tolerance=solver.tolerance, max_iterations=solver.max_iterations, nlp=solver.nlp,
                     start_from_rest=config.walk.start_from_rest, end_at_rest=config.walk.end_at_rest,
-                    stance=solver.stance, lock_rule=solver.lock_rule)
+                    stance=solver.stance, lock_rule=solver.lock_rule, fps=config.output.fps)

@@ -4,7 +4,7 @@ formulations, or different configs), from config files it solves or results fold
 Every input is checked before the first walk starts. Each solved run is also written, as ``run``
 writes it (without plots), to ``<out>/runs/<name>-<method>-<stance>/``, so that a comparison can be
 redone later from folders without solving. The comparison itself (:mod:`klaw_ocp.compare`) and its
-picture (:mod:`klaw_ocp.io.compare_plot`) only read results.
+picture (:mod:`klaw_ocp.figures.compare_plot`) only read results.
 """
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .. import choices
 from ..errors import ConfigError, out_of_range
+from ..result_files.registry import COMPARE_RUNS
 from . import EXIT_OK
 from ._common import add_set_option, check_output_dir, load, resolved_header
 from .run import add_force_option, keeping, report_unfinished
@@ -20,7 +21,6 @@ from .run import add_force_option, keeping, report_unfinished
 HELP = "compare runs: solver modes, stance formulations, configs or finished results folders"
 METHODS = choices.METHODS
 STANCES = choices.STANCES
-RUNS_DIR = "runs"
 
 
 def configure(p: argparse.ArgumentParser) -> None:
@@ -95,8 +95,9 @@ def plan_runs(args: argparse.Namespace) -> list[dict]:
 
 def handle(args: argparse.Namespace) -> int:
     from ..compare import comparison_csv, comparison_rows, comparison_stats, comparison_table
-    from ..io import RunData, write_rendered
-    from ..io.results_folder import StagedFolder
+    from ..result_files import RunData, write_rendered
+    from ..result_files.registry import COMPARISON_CSV, COMPARISON_PNG
+    from ..result_files.results_folder import StagedFolder
 
     planned = plan_runs(args)           # every input checked before the first walk
     first = planned[0]
@@ -120,12 +121,12 @@ def handle(args: argparse.Namespace) -> int:
             runs.append(run)
             if failure is not None:
                 failed.append(failure)
-        from ..io.compare_plot import comparison_figure
-        from ..io.plot_style import png_bytes
+        from ..figures.compare_plot import comparison_figure
+        from ..figures.plot_style import png_bytes
         try:
             rows = comparison_rows(runs)
-            files = {"csv": ("comparison.csv", comparison_csv(rows).encode("utf-8")),
-                     "png": ("comparison.png", png_bytes(comparison_figure(runs)))}
+            files = {"csv": (COMPARISON_CSV, comparison_csv(rows).encode("utf-8")),
+                     "png": (COMPARISON_PNG, png_bytes(comparison_figure(runs)))}
             write_rendered(files, staging)
         except KeyboardInterrupt:
             return report_unfinished(staged, "interrupted", None, "every run solved (the comparison not drawn)")
@@ -134,7 +135,7 @@ def handle(args: argparse.Namespace) -> int:
         # the comparison is written, but of a walk that stopped early: the earlier results stay
         return report_unfinished(staged, "failed", "; ".join(failed), "every run and the comparison")
     staged.commit()
-    print(f"wrote {out / 'comparison.csv'} and {out / 'comparison.png'}")
+    print(f"wrote {out / COMPARISON_CSV} and {out / COMPARISON_PNG}")
     return EXIT_OK
 
 
@@ -155,16 +156,16 @@ def _carry_over(folder: Path, staged, staging: Path) -> None:
 def _solve(item: dict, staging: Path, quiet: bool):
     """Walk one planned config run into ``staging/runs/`` as ``run`` writes it (without plots),
     step by step; returns (RunData, outcome, failure sentence or None)."""
-    from ..io.results_folder import mark_folder
-    from ..io.run_writer import RunWriter
+    from ..result_files.results_folder import mark_folder
+    from ..result_files.run_writer import RunWriter
     from ..walk import walk_spec
     from .run import failure_sentence, finish_into, walk_into
 
     config = item["config"]
-    folder = staging / RUNS_DIR / f"{config.name}-{item['method']}-{item['stance']}"
+    folder = staging / COMPARE_RUNS / f"{config.name}-{item['method']}-{item['stance']}"
     folder.mkdir(parents=True, exist_ok=True)
     header = resolved_header(item["path"], item["sets"], item["method"], item["stance"])
-    writer = RunWriter(folder, config.resolved_yaml(header), config.output.fps)
+    writer = RunWriter(folder, config.resolved_yaml(header))
     walk, outcome, failure = walk_into(writer, walk_spec(config), quiet)
     _, _, outcome, run = finish_into(writer, walk, outcome)
     mark_folder(folder, "run")

@@ -27,7 +27,7 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     from ..errors import ConvergenceError
-    from ..io.results_folder import StagedFolder
+    from ..result_files.results_folder import StagedFolder
     from ..reproduce import check_configs, reproduce
     from ._common import check_output_dir
     t0 = time.perf_counter()

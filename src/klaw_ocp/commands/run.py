@@ -2,17 +2,20 @@
 level, then the low level step by step), its check without solving, and its plots redrawn from a
 finished results folder.
 
-``run`` writes into the results folder: ``summary.json``, ``dynamics.csv``, ``events.csv``,
-``angles.csv`` (the body at ``output.fps`` frames per second, docs/body.md),
-``config.resolved.yaml`` (the config with its ``--set``, ``--method``, ``--stance`` and ``--fps``
-folded in and every default filled in: running it again gives the same ``dynamics.csv`` bytes)
-and, unless ``--no-plots`` or ``output.plots: false``, the plots of :mod:`klaw_ocp.io.plots` in
-``plots/``; with ``output.animation: true`` (the shipped configs) and without ``--no-animation``,
-``walk.gif`` (:mod:`klaw_ocp.io.animation`, docs/gif.md), after the plots and independent of them.
+``run`` writes into the results folder every file of the registry
+(:data:`klaw_ocp.result_files.registry.RUN_FILES`, which names them once): ``summary.json``,
+``dynamics.csv``, ``events.csv``, the body at ``output.fps`` frames per second (``angles.csv``,
+``walk.bvh``, ``walk.mot``), ``config.resolved.yaml`` (the config with its ``--set``,
+``--method``, ``--stance`` and ``--fps`` folded in and every default filled in: running it again
+gives the same ``dynamics.csv`` bytes) and, unless ``--no-plots`` or ``output.plots: false``, the
+plots of :data:`klaw_ocp.figures.registry.PLOTS` in ``plots/``; with ``output.animation: true``
+(the shipped configs) and without ``--no-animation``, ``walk.gif`` (:mod:`klaw_ocp.figures.animation`,
+docs/gif.md), after the plots and independent of them. The registries are read here without
+loading CasADi or matplotlib.
 
-Each step is written as it completes (:class:`klaw_ocp.io.run_writer.RunWriter`, the walk's
+Each step is written as it completes (:class:`klaw_ocp.result_files.run_writer.RunWriter`, the walk's
 ``on_step``) into a folder beside the results folder, which replaces it whole when the walk ends
-(:class:`klaw_ocp.io.results_folder.StagedFolder`); a walk that fails (exit 3) or is interrupted
+(:class:`klaw_ocp.result_files.results_folder.StagedFolder`); a walk that fails (exit 3) or is interrupted
 (exit 130) keeps its completed steps and leaves earlier results untouched. The helpers below
 (:func:`walk_into`, :func:`finish_into`, :func:`report_unfinished`, :func:`keeping`) are shared by
 ``compare``, ``sweep`` and ``reproduce``; docs/experiments.md has the rules.
@@ -26,15 +29,15 @@ from pathlib import Path
 
 from .. import choices
 from ..errors import one_line
+from ..result_files.registry import RUN_FILES
 from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
 from ._common import add_set_option, check_output_dir, load, resolved_header
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
 VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
 PLOT_HELP = "redraw the plots of a finished results folder, solving nothing"
-RESOLVED_FILE = "config.resolved.yaml"    # = klaw_ocp.io.run_writer's (not imported here: it loads CasADi)
-PLOTS_DIR = "plots"
-GIF_FILE = "walk.gif"        # = klaw_ocp.io.animation.GIF_FILE (not imported here: it loads matplotlib)
+PLOTS_DIR = RUN_FILES["plots"].folder
+GIF_FILE = RUN_FILES["animation"].name
 
 
 def configure_run(p: argparse.ArgumentParser) -> None:
@@ -78,14 +81,14 @@ def handle_run(args: argparse.Namespace) -> int:
     plots = config.output.plots and not args.no_plots
     animation = config.output.animation and not args.no_animation
     if plots or animation:               # the drawing processes import matplotlib while the walk is solved
-        from ..io.render_pool import prewarm
+        from ..figures.render_pool import prewarm
         prewarm()
-    from ..io.results_folder import StagedFolder        # the solvers: only for a valid run
-    from ..io.run_writer import RunWriter
+    from ..result_files.results_folder import StagedFolder        # the solvers: only for a valid run
+    from ..result_files.run_writer import RunWriter
     from ..walk import walk_spec
     staged = StagedFolder(out, "run", force=args.force)        # refused here, before any solving
     header = resolved_header(args.config, args.sets, args.method, args.stance, args.fps)
-    writer = RunWriter(staged.open(), config.resolved_yaml(header), config.output.fps)
+    writer = RunWriter(staged.open(), config.resolved_yaml(header))     # the walk carries output.fps
     with keeping(staged, lambda: f"{len(writer.done)} completed step(s)"):
         walk, outcome, failure = walk_into(writer, walk_spec(config), quiet=args.quiet)
         paths, times, outcome, _ = finish_into(writer, walk, outcome, plots=plots, animation=animation)
@@ -137,7 +140,7 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
         drawing = not interrupted and bool(walk.steps)
         plots, animation = plots and drawing, animation and drawing
         if plots or animation:
-            from ..io.render_pool import render_outputs       # on every core (docs/performance.md)
+            from ..figures.render_pool import render_outputs       # on every core (docs/performance.md)
             drawn, times = render_outputs(run, writer.folder / PLOTS_DIR if plots else None,
                                           writer.folder / GIF_FILE if animation else None)
             paths.update(drawn)
@@ -164,7 +167,7 @@ def keeping(staged, what):
         staged.keep()
         raise
     except Exception as exc:
-        from ..io.results_folder import kept_phrase
+        from ..result_files.results_folder import kept_phrase
         kept = staged.keep()
         where = kept_phrase(kept, staged) if kept is None else f"{what()} {kept_phrase(kept, staged)}"
         text = one_line(exc)[:200]
@@ -176,7 +179,7 @@ def keeping(staged, what):
 def report_unfinished(staged, outcome: str, failure, what: str) -> int:
     """Keep the results of a command that failed (``failure``: the ConvergenceError, or a
     sentence) or was interrupted, print its one line and return its exit code."""
-    from ..io.results_folder import kept_phrase
+    from ..result_files.results_folder import kept_phrase
     kept = staged.keep()
     where = kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
     if outcome == "failed":
@@ -236,10 +239,10 @@ def configure_plot(p: argparse.ArgumentParser) -> None:
 
 
 def handle_plot(args: argparse.Namespace) -> int:
-    from ..io import RunData
+    from ..result_files import RunData
     run = RunData.from_folder(args.dir, what="DIR")     # refused before matplotlib is even loaded
     out = check_output_dir(args.out if args.out is not None else Path(args.dir) / PLOTS_DIR, "--out")
-    from ..io.render_pool import render_outputs
+    from ..figures.render_pool import render_outputs
     gif = (Path(args.out) if args.out else Path(args.dir)) / GIF_FILE if args.animation else None
     paths, _ = render_outputs(run, out, gif)
     gif = paths.pop("animation", None)

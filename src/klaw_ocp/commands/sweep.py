@@ -44,8 +44,9 @@ def configure(p: argparse.ArgumentParser) -> None:
 def handle(args: argparse.Namespace) -> int:
     from ..config_paths import combination_label
     from ..errors import Interrupted
-    from ..io.results_folder import StagedFolder
-    from ..io.writers import atomic_write_text
+    from ..result_files.atomic import atomic_write_text
+    from ..result_files.registry import SWEEP_CSV, SWEEP_PNG
+    from ..result_files.results_folder import StagedFolder
     from ..sweep import (append_sweep_row, counts, default_out_dir, parse_vary, run_sweep, summary_line,
                          sweep_csv, write_sweep)
 
@@ -66,7 +67,7 @@ def handle(args: argparse.Namespace) -> int:
         # sweep.csv grows walk by walk, one appended line each (rewriting the whole file after
         # every walk cost time growing with the square of the walks); append_sweep_row says why
         # no finished walk is lost
-        append_sweep_row(staging() / "sweep.csv", row, list(vary))
+        append_sweep_row(staging() / SWEEP_CSV, row, list(vary))
 
     from ..console import CompileNotice
     from ..solvers.kernels import compile_notices
@@ -77,14 +78,14 @@ def handle(args: argparse.Namespace) -> int:
                              on_row=on_row)
         except Interrupted as exc:
             if exc.partial:        # the finished walks again, atomically and in grid order
-                atomic_write_text(staging() / "sweep.csv", sweep_csv(exc.partial, list(vary)))
+                atomic_write_text(staging() / SWEEP_CSV, sweep_csv(exc.partial, list(vary)))
             return report_unfinished(staged, "interrupted", None, f"{len(exc.partial)} finished walk(s)")
         try:
             write_sweep(rows, list(vary), staging(), title=f"{PROG} sweep {os.path.basename(args.config)}")
         except KeyboardInterrupt:
-            return report_unfinished(staged, "interrupted", None, f"all {len(rows)} walks (sweep.png not drawn)")
+            return report_unfinished(staged, "interrupted", None, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)")
     staged.commit()
-    print(summary_line(rows, {"csv": out / "sweep.csv", "png": out / "sweep.png"}))
+    print(summary_line(rows, {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}))
     n = counts(rows)
     if n["ok"] == len(rows):
         return EXIT_OK
@@ -92,5 +93,5 @@ def handle(args: argparse.Namespace) -> int:
     first = next(r for r in rows if r["status"] != "ok")
     label = combination_label({k: first[k] for k in vary})
     print(f"{PROG}: error: {len(rows) - n['ok']} of {len(rows)} walks did not converge or failed, the first "
-          f"{label} ({first['method']}): {first['message']}; see {out / 'sweep.csv'}", file=sys.stderr)
+          f"{label} ({first['method']}): {first['message']}; see {out / SWEEP_CSV}", file=sys.stderr)
     return EXIT_SOLVER_FAILED

@@ -61,7 +61,7 @@ def walk_end(run) -> float:
 
 
 def gait_bars(run) -> list[GaitBar]:
-    """Every stance and swing bar of ``run`` (a :class:`~klaw_ocp.io.run_data.RunData`), in time
+    """Every stance and swing bar of ``run`` (a :class:`~klaw_ocp.result_files.run_data.RunData`), in time
     order of their start. See the module docstring for the rules."""
     steps, end = run.steps, walk_end(run)
     bars: list[GaitBar] = []

@@ -25,7 +25,7 @@ The marker, ``.klaw-ocp``, is a small JSON file: ``written_by``, ``version``, ``
 ``files`` (every file of the folder klaw-ocp wrote, relative, sorted). A folder without it is
 still recognised as klaw-ocp's (written before the marker existed) when it holds the command's
 key file (``summary.json``, ``comparison.csv``, ``sweep.csv``, ``numbers.json``) and only files
-the command writes.
+the command writes. What each command writes is the registry's (:mod:`.registry`).
 """
 from __future__ import annotations
 
@@ -41,20 +41,8 @@ import time
 from pathlib import Path
 
 from ..errors import KlawError
+from .registry import COMMAND_FOLDERS, KEY_FILES, MARKER
 
-MARKER = ".klaw-ocp"
-_RUN = ("summary.json", "dynamics.csv", "events.csv", "angles.csv", "walk.bvh", "walk.mot",
-        "config.resolved.yaml", "walk.gif", "plots", "plots/*.png")
-#: What each command writes into its folder (``/``-separated, each part an fnmatch pattern).
-OUTPUTS = {
-    "run": _RUN,
-    "compare": ("comparison.csv", "comparison.png", "runs", "runs/*", "runs/*/" + MARKER,
-                *(f"runs/*/{p}" for p in _RUN)),
-    "sweep": ("sweep.csv", "sweep.png"),
-    "reproduce": ("README.md", "numbers.json", "comparison.csv", "*.png"),
-}
-#: The file that makes a folder without the marker one of the command's.
-KEY_FILES = {"run": "summary.json", "compare": "comparison.csv", "sweep": "sweep.csv", "reproduce": "numbers.json"}
 #: Files that desktops and the atomic writes leave anywhere; they never make a folder foreign.
 JUNK = (".DS_Store", "Thumbs.db", "desktop.ini", ".*.tmp")
 #: A folder with more entries than this is not a results folder (and is not listed further).
@@ -111,7 +99,7 @@ def inspect_folder(folder, command: str) -> tuple[str, str]:
     marker = read_marker(folder)
     if marker is not None and marker.get("command") != command:
         return "foreign", f"it holds the results of klaw-ocp {marker.get('command')}"
-    allowed = OUTPUTS[command]
+    allowed = COMMAND_FOLDERS[command]
     listed = {str(f) for f in marker["files"]} if marker is not None else set()
     listed_dirs = {f.rsplit("/", i)[0] for f in listed for i in range(1, f.count("/") + 1)}
     if marker is None and (folder / MARKER).exists():
@@ -148,7 +136,7 @@ def _files(folder: Path) -> list[str]:
 def mark_folder(folder, command: str) -> None:
     """Write the marker of a folder klaw-ocp ``command`` wrote: every file in it is listed."""
     from .. import __version__
-    from .writers import atomic_write_text
+    from .atomic import atomic_write_text
     marker = {"written_by": "klaw-ocp", "version": __version__, "command": command, "files": _files(Path(folder))}
     atomic_write_text(Path(folder) / MARKER, json.dumps(marker, indent=2) + "\n")
 
@@ -173,7 +161,7 @@ class StagedFolder:
     that writes one."""
 
     def __init__(self, out, command: str, force: bool = False):
-        if command not in OUTPUTS:
+        if command not in COMMAND_FOLDERS:
             raise ValueError(f"unknown command {command!r}")
         self.out, self.command, self.force = Path(out), command, force
         # a symlinked --out: the folder it points to is the one replaced

@@ -10,7 +10,7 @@
 - :func:`acceleration_figure`: section 5's accelerations "with a granularity of one step": the
   requested and the achieved speed per step, sl and sf per step, and the hip height.
 
-Like every plot here they only read results (:class:`~klaw_ocp.io.run_data.RunData`).
+Like every plot here they only read results (:class:`~klaw_ocp.result_files.run_data.RunData`).
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The body's plots (docs/body.md), drawn from a run's ``angles.csv`` (:attr:`RunData.angles`) and
-its heel strikes and toe-offs (:func:`~klaw_ocp.io.gait_diagram.gait_events`):
+its heel strikes and toe-offs (:func:`~klaw_ocp.figures.gait_diagram.gait_events`):
 
 - ``joint_angles.png``: hip flexion, knee flexion and ankle dorsiflexion of each leg over the
   normalised gait cycle (0-100 % from a heel strike of that leg to its next), the way gait
@@ -35,7 +35,7 @@ MAX_POSTURES = 8              # body.png draws at most this many heel strikes, e
 POSTURE_HALF_WIDTH_M = 0.75   # each posture's panel spans the pelvis x ± this
 MODEL_COLOUR = "#000000"
 
-# -- the stick figure, shared with walk.gif (:mod:`klaw_ocp.io.animation`) ----------------------------
+# -- the stick figure, shared with walk.gif (:mod:`klaw_ocp.figures.animation`) ----------------------------
 SPINE = ("pelvis", "L5", "L3", "L1", "T12", "T6", "T1", "C7", "C4", "C1")
 
 

@@ -20,7 +20,8 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from .writers import atomic_write_bytes
+from ..config_paths import format_value as _label
+from ..result_files.atomic import atomic_write_bytes
 
 _PANEL_IN = 4.6      # panel width, inches
 _DPI = 130
@@ -28,11 +29,6 @@ _MAX_TICKS = 16      # numeric axes with more distinct values get automatic tick
 _FAIL_COLOUR = "#d62728"
 _WALL_NOTE = "(wall time: the first walk in each process includes loading the solver kernels)"
 _LEGEND_MARGIN_IN = 0.1      # the legend's room from each edge of the figure
-
-
-def _label(value) -> str:
-    from ..sweep import format_value
-    return format_value(value)
 
 
 def _is_number(value) -> bool:

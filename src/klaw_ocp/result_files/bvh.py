@@ -43,11 +43,12 @@ import numpy as np
 from ..body import Body
 from ..body_motion.skeleton import (ANGLE_NAMES, JOINTS, end_site_offsets, rest_offsets,
                                     rest_root_position)
-from .fixed_text import fixed_decimals_rows
-from .writers import atomic_write_text
+from .atomic import atomic_write_text
+from .registry import RUN_FILES
+from .tables import decimal_rows
 
 #: The file ``klaw-ocp run`` writes.
-BVH_FILE = "walk.bvh"
+BVH_FILE = RUN_FILES["bvh"].name
 #: Our world (x forward, y up, z right) -> BVH (X left, Y up, Z forward): ``v_bvh = AXES @ v``.
 AXES = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
 #: Each skeleton rotation axis -> (its BVH channel, the sign of the angle in it): AXES maps our
@@ -75,14 +76,16 @@ def _as_body(body) -> Body:
                      f"(summary.json's body), got {type(body).__name__}")
 
 
-def _table_and_body(motion, body) -> tuple[dict, Body]:
-    """(angles.csv's columns, the body) from a RunData, a BodyMotion or a table."""
+def _table_body_fps(motion, body, fps) -> tuple[dict, Body, float | None]:
+    """(angles.csv's columns, the body, the frame rate) from a RunData (its own rate unless
+    ``fps`` is given), a BodyMotion or a table."""
     from .run_data import RunData
     if isinstance(motion, RunData):
         if motion.angles is None:
             raise ValueError(f"motion: the run {motion.name!r} has no angles (a results folder written "
                              f"before angles.csv was)")
         table, body = motion.angles, motion.body_model() if body is None else body
+        fps = motion.fps if fps is None else fps
     elif hasattr(motion, "table") and callable(motion.table):     # body_motion.BodyMotion
         table = motion.table()
     elif isinstance(motion, dict):
@@ -96,21 +99,14 @@ def _table_and_body(motion, body) -> tuple[dict, Body]:
     if missing:
         raise ValueError(f"motion: missing column(s) {', '.join(missing[:5])}"
                          f"{' ...' if len(missing) > 5 else ''} (angles.csv's columns, docs/body.md)")
-    return table, _as_body(body)
+    return table, _as_body(body), fps
 
 
 def _frame_rate(time: np.ndarray, fps) -> float:
-    """The file's frames per second: ``fps`` or, when None, the one the frame times give
-    (9 significant digits; 30 with fewer than two frames)."""
+    """``fps``, checked: a number > 0 that the frame times are equally spaced at (the run's own
+    rate, never one guessed from the times)."""
     if fps is None:
-        if len(time) < 2:
-            from ..config import DEFAULT_FPS
-            fps = DEFAULT_FPS
-        else:
-            span = time[-1] - time[0]
-            if not span > 0:
-                raise ValueError("motion: the frame times do not increase")
-            fps = float(f"{(len(time) - 1) / span:.9g}")
+        raise ValueError("fps: required unless motion is a RunData (which carries the rate it was built at)")
     if isinstance(fps, bool) or not isinstance(fps, (int, float, np.floating, np.integer)) \
             or not math.isfinite(fps) or fps <= 0:
         raise ValueError(f"fps: got {fps!r}, allowed a number > 0")
@@ -175,18 +171,24 @@ def hierarchy_text(body: Body) -> str:
 def bvh_text(motion, body=None, fps: float | None = None) -> str:
     """The BVH file of ``motion`` as text.
 
-    ``motion``: a :class:`~klaw_ocp.io.run_data.RunData` (its ``angles``; its summary's body
-    unless ``body`` is given), a :class:`~klaw_ocp.body_motion.BodyMotion`, or
-    angles.csv's columns as a dict (time in s, root_x/y/z in m, the 56 angles in degrees).
-    ``body``: a :class:`~klaw_ocp.body.Body` or summary.json's body dict. ``fps``: the frame rate
-    (``output.fps``); None takes it from the frame times. Frames must be equally spaced.
+    ``motion``: a :class:`~klaw_ocp.result_files.run_data.RunData` (its ``angles`` at its
+    ``fps``; its summary's body unless ``body`` is given), a
+    :class:`~klaw_ocp.body_motion.BodyMotion`, or angles.csv's columns as a dict (time in s,
+    root_x/y/z in m, the 56 angles in degrees). ``body``: a :class:`~klaw_ocp.body.Body` or
+    summary.json's body dict. ``fps``: the frame rate (``output.fps``), required unless
+    ``motion`` is a RunData. The frames must be equally spaced at it.
     """
-    table, body = _table_and_body(motion, body)
+    table, body, fps = _table_body_fps(motion, body, fps)
     values = channel_values(table)
     rate = _frame_rate(np.asarray(table["time"], dtype=float), fps)
     # "%.17g": 1/30 s reads back as the double nearest 1/30 (Blender: 30 fps, fps_base 1)
     header = f"MOTION\nFrames: {len(values)}\nFrame Time: {1.0 / rate:.17g}\n"
-    return hierarchy_text(body) + header + fixed_decimals_rows(values, DECIMALS, " ")
+    return hierarchy_text(body) + header + decimal_rows(values, DECIMALS, " ")
+
+
+def bvh_file(run) -> bytes:
+    """walk.bvh of a :class:`~.run_data.RunData`, at its frame rate (the registry's renderer)."""
+    return bvh_text(run).encode("utf-8")
 
 
 def write_bvh(path, motion, body=None, fps: float | None = None) -> Path:

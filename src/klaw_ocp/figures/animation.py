@@ -3,7 +3,7 @@
 Three panels, drawn at :data:`GIF_FPS` frames per second of walk time (the GIF's own rate: the
 angles' frames, at ``output.fps``, are interpolated linearly to it) and played back in real time:
 
-- *side* (x forward, y up): the skeleton as in ``body.png`` (:mod:`klaw_ocp.io.body_plots`: legs
+- *side* (x forward, y up): the skeleton as in ``body.png`` (:mod:`klaw_ocp.figures.body_plots`: legs
   and arms coloured by side, the far left side fainter, spine, shoulders, head), in a window that
   follows the pelvis, over a ground line with a tick every 0.25 m and a label every metre, and a
   footprint on the ground wherever a foot was planted (from its heel strike on, drawn where the
@@ -15,7 +15,7 @@ angles' frames, at ``output.fps``, are interpolated linearly to it) and played b
   feet's lines and the pelvis centre's path, the lateral weave, following the walker.
 
 A title names the walk and counts the time. Like every plot it reads results only (a
-:class:`~klaw_ocp.io.run_data.RunData`, from a walk in memory or a finished results folder), so
+:class:`~klaw_ocp.result_files.run_data.RunData`, from a walk in memory or a finished results folder), so
 ``klaw-ocp plot DIR --animation`` redraws it. Every artist is made once; a frame only moves them
 (``set_data``) and the figure is drawn once per frame on its Agg canvas, small (8 x 4 in at
 80 dpi), with no constrained layout and no axis machinery in the moving panels; it draws only
@@ -37,15 +37,16 @@ from matplotlib.patches import Circle, Rectangle
 from matplotlib.transforms import blended_transform_factory
 
 from ..body_motion.skeleton import SIDES, Dimensions
+from ..result_files.atomic import atomic_path
+from ..result_files.registry import RUN_FILES
 from .body_plots import CHAINS, chain_points, has_angles, skeleton_at
 from .gait_diagram import gait_events
 from .gif_file import GifStream
 from .gif_pixels import FONT, Blitter, LiveText, MovingLabels, StaticText
 from .plot_style import LEG_COLOURS, add_axes_in, new_figure
 from .strobe import GROUND_COLOUR, TRUNK_COLOUR
-from .writers import atomic_path
 
-GIF_FILE = "walk.gif"
+GIF_FILE = RUN_FILES["animation"].name
 #: frames per second of walk.gif; GIF stores frame durations in 1/100 s, so 1000 / GIF_FPS is a
 #: whole number of 10 ms (80 ms) and the GIF plays back in real time
 GIF_FPS = 12.5

@@ -5,21 +5,22 @@ nothing").
 completed step it
 
 - appends the step's rows to ``dynamics.csv`` (the file grows step by step; its bytes at the end
-  are those of :func:`klaw_ocp.io.writers.dynamics_csv` of the whole walk),
+  are those of :func:`klaw_ocp.result_files.tables.dynamics_csv` of the whole walk),
 - appends the new foot events to ``events.csv`` (rewritten instead, atomically, in the rare
   case that an event of the new step falls before one already written),
 - rewrites ``summary.json`` atomically (``status: "running"``, every completed step): the full
   summary, but as compact JSON, each step's entry serialised once, when it completes, and the
-  summary assembled from those texts (:func:`klaw_ocp.io.writers.summary_text`).
+  summary assembled from those texts (:func:`klaw_ocp.result_files.summary_json.summary_text`).
 
-These per-step writes skip the fsync of :func:`~klaw_ocp.io.writers.atomic_write_bytes` (they are
+These per-step writes skip the fsync of :func:`~klaw_ocp.result_files.atomic.atomic_write_bytes` (they are
 safe against a crash of the process, and the next step rewrites them anyway); they cost about 1 ms
 a step beside the 15-20 ms of the natural walk's solve (docs/experiments.md). :meth:`RunWriter.finish`
 then writes the final ``summary.json`` (indented; ``status`` "ok", "failed" with its ``failure``,
-or "interrupted") and ``events.csv`` durably, and the files that need the whole walk: ``angles.csv``,
-``walk.bvh``, ``walk.mot`` (the last stance leg is completed by the next step's double support),
-the plots and ``walk.gif``. A crash between steps leaves the completed steps on disk with
-``status: "running"``.
+or "interrupted") and ``events.csv`` durably, and the files that need the whole walk: the body's
+(``angles.csv``, ``walk.bvh``, ``walk.mot``: the last stance leg is completed by the next step's
+double support), at the walk's own frame rate (``output.fps``); the caller then draws the plots
+and ``walk.gif``. A crash between steps leaves the completed steps on disk with ``status:
+"running"``. Every file name is the registry's (:mod:`.registry`).
 """
 from __future__ import annotations
 
@@ -31,23 +32,24 @@ from pathlib import Path
 import numpy as np
 
 from ..results import COLUMNS, step_hip_offsets, mean_hip_speed_kmh, step_summary, step_table, summary_of
-from .writers import atomic_write_bytes, dynamics_csv, events_csv, render_body, summary_text, write_rendered
+from .atomic import atomic_write_bytes, write_rendered
+from .registry import RUN_FILES
+from .render import body_keys, render_run
+from .summary_json import summary_text
+from .tables import dynamics_csv, events_csv
 
-DYNAMICS_FILE = "dynamics.csv"
-SUMMARY_FILE = "summary.json"
-EVENTS_FILE = "events.csv"
-RESOLVED_FILE = "config.resolved.yaml"
+DYNAMICS_FILE, SUMMARY_FILE, EVENTS_FILE, RESOLVED_FILE = (RUN_FILES[k].name for k in
+                                                           ("dynamics", "summary", "events", "resolved"))
 
 
 class RunWriter:
     """Writes one run into ``folder``: ``config.resolved.yaml`` (``resolved_yaml``, if given) and
     the header of ``dynamics.csv`` now, each completed step when called (:meth:`step`, the
     ``on_step`` of :func:`~klaw_ocp.walk.simulate_walk`), everything else in :meth:`finish`.
-    ``fps``: the frames per second of the body's files."""
+    The body's files are at the walk's frame rate (``walk.spec.fps``, from ``output.fps``)."""
 
-    def __init__(self, folder, resolved_yaml: str | None = None, fps: float | None = None):
+    def __init__(self, folder, resolved_yaml: str | None = None):
         self.folder = Path(folder)
-        self.fps = fps
         #: per written step: (table, summary entry, its JSON text, dynamics.csv's size after it)
         self.done: list[tuple] = []
         self.step_s = 0.0          # time spent writing the steps (the benchmark's "per-step writing")
@@ -121,7 +123,7 @@ class RunWriter:
         """Write the rest of the run: any step not written yet, the final summary and events
         (durably), with ``body`` angles.csv, walk.bvh and walk.mot. Returns the paths by name and
         the RunData of the walk (the plots and walk.gif are drawn from it:
-        :func:`klaw_ocp.io.render_pool.render_outputs`)."""
+        :func:`klaw_ocp.figures.render_pool.render_outputs`)."""
         from .run_data import RunData
         self._catch_up(walk)
         path = self.folder / DYNAMICS_FILE
@@ -136,8 +138,8 @@ class RunWriter:
         if (self.folder / RESOLVED_FILE).exists():
             paths["resolved"] = self.folder / RESOLVED_FILE
         table = self.table()
-        run = RunData.from_walk(walk, table=table, summary=summary, fps=self.fps) if body else \
-            RunData(name=walk.spec.name, summary=summary, table=table)
+        run = RunData.from_walk(walk, table=table, summary=summary) if body else \
+            RunData(name=walk.spec.name, summary=summary, table=table, fps=walk.spec.fps)
         if body:
-            paths.update(write_rendered(render_body(run), self.folder))
+            paths.update(write_rendered(render_run(run, body_keys()), self.folder))
         return paths, run

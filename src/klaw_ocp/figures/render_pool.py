@@ -1,12 +1,13 @@
 """A run's plots and walk.gif drawn on the machine's cores (``klaw-ocp run`` and ``plot``).
 
-The seven PNGs and walk.gif are independent of each other and take seconds of matplotlib (its
-fixed costs per axes, tick and text), while the walk itself takes a fraction of one. On a machine
-with two cores or more they are drawn in worker processes, each output a task, the longest first
-(:data:`COST_ORDER`), so that the cores finish together.
+The plots (:data:`klaw_ocp.figures.registry.PLOTS`) and walk.gif are independent of each other
+and take seconds of matplotlib (its fixed costs per axes, tick and text), while the walk itself
+takes a fraction of one. On a machine with two cores or more they are drawn in worker processes,
+each output a task, the longest first (:func:`klaw_ocp.figures.registry.cost_order`), so that the
+cores finish together.
 
 The workers are forked from multiprocessing's *forkserver*, a clean process that has imported
-matplotlib and the plotting modules once (:data:`PRELOAD`): a worker then starts in milliseconds
+matplotlib and the drawing modules once (:data:`PRELOAD`): a worker then starts in milliseconds
 with nothing left to import, and never inherits the solving process (CasADi, its threads). The
 server is started by :func:`prewarm` before the walk is solved, so its imports (about a second
 of CPU) run on the other core while the walk runs on this one.
@@ -23,14 +24,13 @@ import gc
 import os
 import time
 
+from ..result_files.registry import RUN_FILES
+from .registry import GIF_TASK, PLOTS, cost_order, figure_modules
+
+#: walk.gif's function, ``(run, path) -> path or None``
+_GIF = RUN_FILES["animation"].renderer
 #: the modules the forkserver imports once for every worker (matplotlib with them)
-PRELOAD = ["klaw_ocp.io.plots", "klaw_ocp.io.animation"]
-#: the outputs from the slowest to the quickest (measured on the natural walk): the longest
-#: start first, so that neither core waits for the other at the end
-COST_ORDER = ("gif", "body", "joint_angles", "legs", "torques", "states", "gait_diagram", "hip_height")
-GIF_TASK = "gif"
-#: = the names of klaw_ocp.io.plots.PLOTS, in its order (not imported here: it loads matplotlib)
-PLOT_NAMES = ("hip_height", "gait_diagram", "torques", "states", "legs", "joint_angles", "body")
+PRELOAD = figure_modules() + [_GIF.partition(":")[0]]
 
 _RUN = None                  # the worker's RunData, sent once per worker (_receive)
 
@@ -72,7 +72,7 @@ def render_outputs(run, plots_dir=None, gif_path=None) -> tuple[dict, dict]:
     a body to animate); {"plots": s, "animation": s}, None for what was not drawn: drawn in
     parallel, the wall time from the start until the last plot, or walk.gif, was ready; in this
     process, each one's own time)."""
-    tasks = [t for t in COST_ORDER if (t == GIF_TASK and gif_path is not None)
+    tasks = [t for t in cost_order() if (t == GIF_TASK and gif_path is not None)
              or (t != GIF_TASK and plots_dir is not None)]
     # the result files are written: what rendering them took (a 1000-step walk's text files are
     # a few hundred MB of transient strings) goes back to the system before the workers draw
@@ -90,9 +90,9 @@ def render_outputs(run, plots_dir=None, gif_path=None) -> tuple[dict, dict]:
         plots_s = max([seconds for task, (_, seconds) in done.items() if task != GIF_TASK], default=0.0)
     paths, times = {}, {"plots": None, "animation": None}
     if plots_dir is not None:
-        from .writers import write_rendered
+        from ..result_files.atomic import write_rendered
         t0 = time.perf_counter()
-        paths.update(write_rendered({name: done[name][0] for name in PLOT_NAMES}, plots_dir))
+        paths.update(write_rendered({name: done[name][0] for name in PLOTS}, plots_dir))
         times["plots"] = plots_s + time.perf_counter() - t0
     if gif_path is not None and done[GIF_TASK][0] is not None:
         paths["animation"], times["animation"] = done[GIF_TASK]
@@ -152,8 +152,8 @@ def _trim() -> None:
 def _draw(run, task: str, gif_path):
     """walk.gif written (its path, or None without a body to animate), or a plot's (file name,
     PNG bytes)."""
+    from ..result_files.registry import load
     if task == GIF_TASK:
-        from .animation import write_animation
-        return write_animation(run, gif_path)
+        return load(_GIF)(run, gif_path)
     from .plots import render_plots
     return render_plots(run, [task])[task]

@@ -1,6 +1,6 @@
 """``compare.png``: several finished runs on one page (:func:`comparison_figure`).
 
-Reads :class:`~klaw_ocp.io.run_data.RunData` only; never solves. The first run is the reference
+Reads :class:`~klaw_ocp.result_files.run_data.RunData` only; never solves. The first run is the reference
 (run 1). From top to bottom:
 
 - the hip height of every run overlaid (one colour per run, :data:`RUN_COLOURS`, and one line

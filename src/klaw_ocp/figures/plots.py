@@ -1,28 +1,29 @@
-"""The seven plots of every run (``<results>/plots/``), drawn from a :class:`~klaw_ocp.io.run_data.RunData`.
+"""The plots of every run (``<results>/plots/``; :mod:`.registry` lists them), drawn from a
+:class:`~klaw_ocp.result_files.run_data.RunData`, and three of their figure functions.
 
 - ``hip_height.png`` (§4.2): the hip height over time against the vertical sinusoid the stance is
   guided towards (one bump per step, lowest at the heel strikes) and the heel-strike floor the hip
   should not drop below; a second axis shows the difference in mm.
-- ``gait_diagram.png`` (§3 state-phase timings, figure 3): :mod:`klaw_ocp.io.gait_diagram`.
+- ``gait_diagram.png`` (§3 state-phase timings, figure 3): :mod:`klaw_ocp.figures.gait_diagram`.
 - ``torques.png`` (§4.2, §4.3): every applied force and torque, F_w, pa, F_θ1, F_θ2 of the
   stance and F_θ3, F_θ4 of the swing, one axis each, coloured by subphase, with a swing2
   recovery (§4.3 "recovery algorithm") shaded.
 - ``states.png`` (§4, figure 2): w, θ1, θ2 of the stance model and θ3, θ4 of the swing model.
-- ``legs.png`` (§5, figure 8): a strobe of the dynamic model, :mod:`klaw_ocp.io.strobe`.
+- ``legs.png`` (§5, figure 8): a strobe of the dynamic model, :mod:`klaw_ocp.figures.strobe`.
 - ``joint_angles.png`` and ``body.png`` (§4, the body of 56 angles): hip, knee and ankle over the
-  gait cycle, and the skeleton at heel strikes beside the dynamic model, :mod:`klaw_ocp.io.body_plots`.
+  gait cycle, and the skeleton at heel strikes beside the dynamic model, :mod:`klaw_ocp.figures.body_plots`.
 
-A walk of more than 60 steps (:data:`~klaw_ocp.io.plot_style.MAX_DRAWN_STEPS`) is drawn in two
+A walk of more than 60 steps (:data:`~klaw_ocp.figures.plot_style.MAX_DRAWN_STEPS`) is drawn in two
 parts, its first 40 steps and its last 10, side by side on a broken time axis, and the title says
-which steps (:func:`~klaw_ocp.io.plot_style.drawn_steps`): a whole long walk was a solid band.
+which steps (:func:`~klaw_ocp.figures.plot_style.drawn_steps`): a whole long walk was a solid band.
 
 Every time plot follows bioptim: a dark thin vertical line at each step boundary (heel strike),
 light ones at the subphase boundaries (toe-off, end of swing1, end of swing2), and one colour per
-subphase (:data:`~klaw_ocp.io.plot_style.SUBPHASE_COLOURS`). A line is drawn per subphase with
+subphase (:data:`~klaw_ocp.figures.plot_style.SUBPHASE_COLOURS`). A line is drawn per subphase with
 NaN breaks (one artist per subphase, not one per sample) and never joins two steps: at a heel
 strike the stance and swing coordinates change legs.
 
-The axes are placed in inches (:func:`~klaw_ocp.io.plot_style.axes_column`), with margins sized
+The axes are placed in inches (:func:`~klaw_ocp.figures.plot_style.axes_column`), with margins sized
 for their labels, instead of a constrained layout: that alone would cost about a third of the
 time of the plots. The functions read results only: they never solve and never import a
 solver or pyplot.
@@ -35,11 +36,10 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
 from ..errors import ConfigError, out_of_range
-from .gait_diagram import gait_diagram_figure, walk_end
+from .gait_diagram import walk_end
 from .plot_style import (ACCENT, FONT_PT, SUBPHASE_COLOURS, SUBPHASE_LABELS, SYMBOLS, axes_rows, drawn_note,
                          mark_breaks, new_figure, part_spans, png_bytes, style_axes)
-from .body_plots import body_figure, joint_angles_figure
-from .strobe import legs_figure
+from .registry import PLOTS
 
 TABLE_SUBPHASES = ("double_support", "swing1", "swing2", "swing3")
 _RECOVERY_SHADE = {"facecolor": "#D55E00", "alpha": 0.12, "hatch": "///", "edgecolor": "#D55E00", "lw": 0}
@@ -248,23 +248,12 @@ def hip_height_figure(run):
     return fig
 
 
-#: name -> (file name, figure function of a RunData)
-PLOTS = {
-    "hip_height": ("hip_height.png", hip_height_figure),
-    "gait_diagram": ("gait_diagram.png", gait_diagram_figure),
-    "torques": ("torques.png", torques_figure),
-    "states": ("states.png", states_figure),
-    "legs": ("legs.png", legs_figure),
-    "joint_angles": ("joint_angles.png", joint_angles_figure),
-    "body": ("body.png", body_figure),
-}
-
-
 def render_plots(run, names=None) -> dict[str, tuple[str, bytes]]:
     """Every plot of ``run`` (or those in ``names``) as name -> (file name, PNG bytes), ready for
-    :func:`klaw_ocp.io.writers.write_rendered` into ``<results>/plots/``."""
+    :func:`klaw_ocp.result_files.atomic.write_rendered` into ``<results>/plots/``."""
+    from ..result_files.registry import load
     names = list(PLOTS) if names is None else list(names)
     unknown = sorted(set(names) - set(PLOTS))
     if unknown:
         raise ConfigError(out_of_range("plot names", unknown, f"any of {sorted(PLOTS)}"))
-    return {name: (PLOTS[name][0], png_bytes(PLOTS[name][1](run))) for name in names}
+    return {name: (PLOTS[name].file, png_bytes(load(PLOTS[name].figure)(run))) for name in names}

@@ -41,11 +41,12 @@ from ..body import Body
 from ..errors import one_line
 from ..body_motion.skeleton import (ANGLE_NAMES, LUMBAR, THORACIC, frames_array, joint_index,
                                     local_rotations, rest_root_position, zxy_angles)
-from .fixed_text import fixed_decimals_rows
-from .writers import atomic_write_bytes
+from .atomic import atomic_write_bytes
+from .registry import RUN_FILES
+from .tables import decimal_rows
 
 #: The results file's name.
-MOT_FILE = "walk.mot"
+MOT_FILE = RUN_FILES["mot"].name
 
 #: The coordinates written, in column order (gait2392's names; gait10dof18musc has the subset
 #: pelvis_tilt, pelvis_tx, pelvis_ty, hip_flexion, knee_angle, ankle_angle and lumbar_extension).
@@ -140,12 +141,17 @@ def mot_text(table: dict, body: Body, model_scale: float = 1.0, name: str = "wal
     title = one_line(name) or "walk"
     head = (f"{title}\nversion=1\nnRows={n}\nnColumns={len(MOT_COLUMNS)}\ninDegrees=yes\nendheader\n"
             + "\t".join(MOT_COLUMNS) + "\n")
-    return head + fixed_decimals_rows(np.column_stack([columns[c] for c in MOT_COLUMNS]), MOT_DECIMALS, "\t")
+    return head + decimal_rows(np.column_stack([columns[c] for c in MOT_COLUMNS]), MOT_DECIMALS, "\t")
 
 
 def render_mot(table: dict, body: Body, model_scale: float = 1.0, name: str = "walk") -> bytes:
-    """:func:`mot_text` as UTF-8 bytes (for :func:`klaw_ocp.io.writers.write_rendered`)."""
+    """:func:`mot_text` as UTF-8 bytes (for :func:`klaw_ocp.result_files.atomic.write_rendered`)."""
     return mot_text(table, body, model_scale, name).encode("utf-8")
+
+
+def mot_file(run) -> bytes:
+    """walk.mot of a :class:`~.run_data.RunData` on the unscaled models (the registry's renderer)."""
+    return render_mot(run.angles, run.body_model(), name=run.summary.get("name", "walk"))
 
 
 def write_mot(path, table: dict, body: Body, model_scale: float = 1.0, name: str = "walk") -> Path:

@@ -2,7 +2,7 @@
 
 :class:`RunData` is built either from a simulated :class:`~klaw_ocp.walk.Walk` in memory
 (:meth:`RunData.from_walk`) or from a results folder that ``klaw-ocp run`` wrote
-(:meth:`RunData.from_folder`: ``summary.json``, ``dynamics.csv`` and ``angles.csv``). Both give the same object,
+(:meth:`RunData.from_folder`: its summary, sample table and angles, :mod:`.registry`). Both give the same object,
 so ``klaw-ocp plot DIR`` redraws a finished run and ``klaw-ocp compare`` reads old ones without
 solving anything. Nothing here imports a solver.
 
@@ -10,7 +10,9 @@ solving anything. Nothing here imports a solver.
 (``subphase`` an array of str, ``step`` of int); ``summary`` is the dict of ``summary.json``
 (:func:`klaw_ocp.results.walk_summary`); ``angles`` every column of ``angles.csv`` (the body at
 every frame: time, root, the 56 angles in degrees, :meth:`klaw_ocp.body_motion.BodyMotion.table`),
-or None for a results folder written before the body was.
+or None for a results folder written before the body was; ``fps`` the frames per second of the
+body's files (``output.fps``, which summary.json records), so that walk.bvh is written at the rate
+the run was, never one guessed from the frame times.
 """
 from __future__ import annotations
 
@@ -23,32 +25,36 @@ import numpy as np
 
 from ..body import Body
 from ..errors import ConfigError
+from .registry import RUN_FILES
 
-SUMMARY_FILE = "summary.json"
-DYNAMICS_FILE = "dynamics.csv"
-ANGLES_FILE = "angles.csv"
+SUMMARY_FILE, DYNAMICS_FILE, ANGLES_FILE, RESOLVED_FILE = (RUN_FILES[k].name for k in
+                                                           ("summary", "dynamics", "angles", "resolved"))
+#: a folder written before summary.json recorded its fps and before config.resolved.yaml was: 30
+#: fps, the only rate there was (output.fps came after config.resolved.yaml)
+_OLD_FPS = 30.0
 _TEXT_COLUMNS = ("subphase",)
 _INT_COLUMNS = ("step",)
 
 
 @dataclass
 class RunData:
-    """One run's results: ``name`` (a label), ``summary``, ``table``, ``angles`` and, when read
-    from disk, ``folder``."""
+    """One run's results: ``name`` (a label), ``summary``, ``table``, ``angles``, ``fps`` (the
+    frames per second of ``angles``) and, when read from disk, ``folder``."""
     name: str
     summary: dict
     table: dict
     folder: Path | None = None
     extra: dict = field(default_factory=dict)
     angles: dict | None = None
+    fps: float | None = None
 
     # -- construction ----------------------------------------------------------------------------
     @classmethod
     def from_walk(cls, walk, table: dict | None = None, summary: dict | None = None,
                   fps: float | None = None) -> "RunData":
         """The results of a walk in memory (``table``/``summary``: when the caller has them
-        already), the body's angles at ``fps`` frames per second (default: output.fps's)."""
-        from ..config import DEFAULT_FPS
+        already), the body's angles at ``fps`` frames per second (default: the walk's own,
+        ``output.fps`` of its config)."""
         from ..body_motion import ANGLES_COLUMNS, body_motion
         from ..results import hip_offsets, walk_summary, walk_table
         # the hips of every node, once for the table and the summary
@@ -57,9 +63,10 @@ class RunData:
             table = walk_table(walk, offsets) if walk.steps else _empty_table()
         if summary is None:
             summary = walk_summary(walk, table, offsets=offsets)
-        angles = (body_motion(walk, DEFAULT_FPS if fps is None else fps).table() if walk.steps
+        fps = walk.spec.fps if fps is None else fps
+        angles = (body_motion(walk, fps).table() if walk.steps
                   else {c: np.array([]) for c in ANGLES_COLUMNS})
-        return cls(name=walk.spec.name, summary=summary, table=table, angles=angles)
+        return cls(name=walk.spec.name, summary=summary, table=table, angles=angles, fps=fps)
 
     @classmethod
     def from_folder(cls, folder, what: str = "results folder") -> "RunData":
@@ -83,7 +90,7 @@ class RunData:
             raise ConfigError(f"{what}: got {str(summary_path)!r} without steps and body, allowed a "
                               f"{SUMMARY_FILE} written by klaw-ocp run")
         return cls(name=str(summary.get("name", folder.name)), summary=summary, table=table, folder=folder,
-                   angles=angles)
+                   angles=angles, fps=_folder_fps(folder, summary))
 
     # -- views -----------------------------------------------------------------------------------
     @property
@@ -116,6 +123,20 @@ class RunData:
     def duration(self) -> float:
         steps = self.steps
         return steps[-1]["t_start_s"] + steps[-1]["t_step_s"] - steps[0]["t_start_s"] if steps else 0.0
+
+
+def _folder_fps(folder: Path, summary: dict) -> float:
+    """The frames per second a results folder was written at: summary.json's ``fps``, else (a
+    folder written before it recorded it) config.resolved.yaml's ``output.fps``, else 30."""
+    fps = summary.get("fps")
+    if fps is None and (folder / RESOLVED_FILE).is_file():
+        import yaml
+        try:
+            resolved = yaml.safe_load((folder / RESOLVED_FILE).read_text(encoding="utf-8"))
+            fps = resolved["output"]["fps"]
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError):
+            fps = None
+    return float(fps) if isinstance(fps, (int, float)) and not isinstance(fps, bool) and fps > 0 else _OLD_FPS
 
 
 def _empty_table() -> dict:
