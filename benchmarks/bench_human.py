@@ -29,6 +29,7 @@ import yaml
 import klaw_ocp
 from klaw_ocp.body_motion import body_motion
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
+from klaw_ocp.human_gait import GPS_VARIABLES, human_figures
 from klaw_ocp.results import foot_events, walk_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,16 +56,17 @@ class Figure:
 
 FIGURES = (
     Figure("knee_lr", "knee flexion, loading-response peak (0-15 %)", "deg", 15, 20, "15 to 20", True),
-    Figure("knee_to", "knee flexion at toe-off", "deg", 35, 40, "35 to 40"),
+    Figure("knee_mid", "knee flexion, most near 40 % (35-45 %)", "deg", 0, 10, "0 to 10"),
+    Figure("knee_to", "knee flexion at toe-off", "deg", 30, 50, "30 to 50", True),
     Figure("knee_swing", "knee flexion, swing peak", "deg", 60, 65, "60 to 65", True),
     Figure("knee_swing_at", "  when (% of cycle)", "%", 70, 73, "70 to 73"),
     Figure("thigh_hs", "thigh angle at heel strike (+ forward)", "deg", 20, 25, "20 to 25", True),
     Figure("thigh_min", "thigh angle, most extended", "deg", -20, -10, "-20 to -10", True),
     Figure("hip_hs", "hip flexion at heel strike", "deg", 20, 35, "20 to 35", True),
     Figure("hip_ext", "hip flexion, peak extension", "deg", -15, -5, "-15 to -5", True),
-    Figure("hip_range", "hip flexion range", "deg", 40, 45, "40 to 45", True),
-    Figure("ankle_df", "ankle, peak dorsiflexion in stance", "deg", 8, 12, "8 to 12"),
-    Figure("ankle_pf", "ankle, peak plantarflexion near toe-off", "deg", -20, -15, "-20 to -15"),
+    Figure("hip_range", "hip flexion range", "deg", 38, 52, "38 to 52", True),
+    Figure("ankle_df", "ankle, most dorsiflexed at 35-55 %", "deg", 8, 15, "8 to 15"),
+    Figure("ankle_pf", "ankle, most plantarflexed, toe-off to +10 %", "deg", -25, -12, "-25 to -12", True),
     Figure("pelvis_list", "pelvic list, half range (+/-)", "deg", 3, 5, "3 to 5"),
     Figure("pelvis_rot", "pelvic rotation, half range (+/-)", "deg", 3, 6, "3 to 6", True),
     Figure("lateral", "pelvis lateral displacement, range", "cm", 4, 5, "4 to 5"),
@@ -75,7 +77,12 @@ FIGURES = (
     Figure("toe_off", "toe-off", "%", 60, 62, "60 to 62", True),
     Figure("jump_main", "leg rate jump at heel strikes/toe-offs", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("jump_other", "leg rate jump, other boundaries", "deg/s", 0, 100, "<= 100", digits=0),
+    Figure("stance_jump", "stance leg rate jump (100 fps)", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("hip_torque", "peak swing hip torque per kg", "N m/kg", 0, 1.0, "<= 1.0", digits=2),
+    Figure("gvs_thigh", "GVS thigh (RMS vs normative)", "deg", 0, 8, "<= 8 (people ~5)", True),
+    Figure("gvs_knee", "GVS knee", "deg", 0, 8, "<= 8 (people ~5)", True),
+    Figure("gvs_ankle", "GVS ankle", "deg", 0, 8, "<= 8 (people ~5)", True),
+    Figure("gps", "gait profile score, sagittal (Baker 2009)", "deg", 0, 8, "<= 8 (people 5-6)", True),
 )
 
 
@@ -153,24 +160,16 @@ def measure(walk, fps: float) -> dict:
             idx = window(t, t0, t1)
             knee = deg[:, COL[f"{p}_knee_flexion"]]
             hip = deg[:, COL[f"{p}_hip_flexion"]]
-            ankle = deg[:, COL[f"{p}_ankle_dorsiflexion"]]
             thigh = thigh_angle(bm.legs[side])
             lr = window(t, t0, t0 + 0.15 * T)
             vals["knee_lr"].append(knee[lr].max())
-            vals["knee_to"].append(interp(t_to, t, knee))
             sw = window(t, t_to, t1)
             k = sw[np.argmax(knee[sw])]
             vals["knee_swing"].append(knee[k])
             vals["knee_swing_at"].append(pct(t[k]))
             vals["thigh_hs"].append(interp(t0, t, thigh))
-            vals["thigh_min"].append(thigh[idx].min())
             vals["hip_hs"].append(interp(t0, t, hip))
             vals["hip_ext"].append(hip[idx].min())
-            vals["hip_range"].append(hip[idx].max() - hip[idx].min())
-            st = window(t, t0, t_to)
-            vals["ankle_df"].append(ankle[st].max())
-            pf = window(t, t_ho, t_to + 0.10 * T)
-            vals["ankle_pf"].append(ankle[pf].min())
             lst, rot = deg[idx, COL["pelvis_list"]], deg[idx, COL["pelvis_rotation"]]
             vals["pelvis_list"].append((lst.max() - lst.min()) / 2)
             vals["pelvis_rot"].append((rot.max() - rot.min()) / 2)
@@ -244,8 +243,14 @@ def measure(walk, fps: float) -> dict:
             vals["hip_torque"].append(abs(float(tab["F_theta3"][i])) / mass)
             t_to = steps[k].t_start + steps[k].plan.timings.t_ds
             torque_at.append((float(tab["F_theta3"][i]), str(tab["subphase"][i]), float(tab["t"][i]) - t_to))
+    human = human_figures(walk, bm, START_STEPS)
+    for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump"):
+        vals[key] = list(human.values[key])
+    for var in GPS_VARIABLES:
+        vals[f"gvs_{var}"] = [v for (side, name), v in human.gvs.items() if name == var]
+    vals["gps"] = [human.gps]
     plan = steps[0].plan
-    return {"values": vals, "cycles": cycles, "worst": worst, "elsewhere": elsewhere, "torque_at": torque_at,
+    return {"values": vals, "human": human, "cycles": cycles, "worst": worst, "elsewhere": elsewhere, "torque_at": torque_at,
             "plan": {"sl": plan.constraints.step_length, "sf": 60.0 / plan.timings.t_step,
                      "t_cycle": plan.timings.t_cycle, "t_ds": plan.timings.t_ds}}
 
@@ -326,7 +331,8 @@ def main(argv=None) -> int:
     print("-" * len(head))
     sections = {"knee_lr": "knee", "thigh_hs": "thigh and hip", "ankle_df": "ankle",
                 "pelvis_list": "pelvis", "arm_range": "arm", "foot_flat": "event timing (% of cycle)",
-                "jump_main": "smoothness (largest rate jump of any leg angle)", "hip_torque": "swing hip torque"}
+                "jump_main": "smoothness (largest rate jump of any leg angle)", "hip_torque": "swing hip torque",
+                "gvs_thigh": "sagittal gait profile against the normative curves (docs/human-gait.md)"}
     for fig in FIGURES:
         if fig.key in sections:
             print(f"[{sections[fig.key]}]")
@@ -345,6 +351,11 @@ def main(argv=None) -> int:
               f"({r['worst']['jump_main'][1]}, {r['worst']['jump_main'][2]}); at other boundaries "
               f"{r['worst']['jump_other'][0]:.0f} deg/s ({r['worst']['jump_other'][1]}, {r['worst']['jump_other'][2]}); "
               f"inside the subphases {r['elsewhere'][0]:.0f} deg/s ({r['elsewhere'][1]}, {r['elsewhere'][2]})")
+        h = r["human"]
+        where = max(zip(h.values["stance_jump"], h.values["stance_jump_where"]), key=lambda x: x[0], default=None)
+        if where:
+            print(f"  {s:g} km/h: v* = {h.v_star:.3f}; largest stance-leg rate jump at 100 fps {where[0]:.0f} deg/s "
+                  f"({where[1][0]}, {where[1][1]:.1f} % of its cycle)")
         if r["torque_at"]:
             f, sub, dt = max(r["torque_at"], key=lambda x: abs(x[0]))
             print(f"  {s:g} km/h: peak swing hip torque {f:+.0f} N m in {sub}, {1e3 * dt:.0f} ms after toe-off")

@@ -23,6 +23,7 @@ ALLOWED = {
     "body_motion": {"kinematics", "dynamics", "gait", "body"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
+    "human_gait": BASE | {"results", "body_motion", "gait", "body"},
     "result_files": BASE | {"results", "body_motion", "body", "package"},
     "figures": BASE | {"result_files", "body_motion", "compare", "config_paths"},
     "sweep": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
