@@ -79,6 +79,27 @@ def test_spring_damper_hand_values_and_signs():
     assert spring_damper(0.1, 0.3, 100.0, 10.0, 0.25) == pytest.approx(spring_damper(0.1, 0.3, 100.0, 10.0, 0.2, 0.05))
 
 
+def test_the_hip_holds_its_height_into_terminal_stance_and_falls_late():
+    """Issue #34's shape: the bump rises over hip_rise of the step, holds, and falls over the last
+    hip_fall with its raised cosine run in 1 - (1 - r)^power; the paper's sinusoid is rise = fall =
+    1/2, power 1; the rate is the derivative throughout, 0 at both ends."""
+    T, y0, y1, exc = 0.6, 0.85, 0.87, 0.03
+    paper = lambda t: [float(v) for v in hip_height_reference(t, T, y0, y1, exc)]
+    same = lambda t: [float(v) for v in hip_height_reference(t, T, y0, y1, exc, 0.5, 0.5, 1.0)]
+    for t in (0.05, 0.2, 0.3, 0.45, 0.58):
+        assert same(t) == pytest.approx(paper(t), abs=1e-15)
+    ref = lambda t: [float(v) for v in hip_height_reference(t, T, y0, y1, exc, 0.5, 0.45, 1.5)]
+    blend = lambda t: y0 + (y1 - y0) * 0.5 * (1 - math.cos(math.pi * t / T))
+    assert ref(0.0) == pytest.approx([y0, 0.0], abs=1e-12) and ref(T) == pytest.approx([y1, 0.0], abs=1e-12)
+    assert ref(0.31)[0] == pytest.approx(blend(0.31) + exc, abs=1e-12)       # on the plateau (0.5 T to 0.55 T)
+    r = (T - 0.5) / (0.45 * T)                                             # the fall ahead at t = 0.5
+    assert ref(0.5)[0] == pytest.approx(blend(0.5) + exc * 0.5 * (1 - math.cos(math.pi * (1 - (1 - r) ** 1.5))))
+    assert ref(0.5)[0] > paper(0.5)[0] and ref(0.45)[0] > paper(0.45)[0]   # higher into terminal stance
+    for t in (0.1, 0.25, 0.34, 0.41, 0.5, 0.59):
+        h = 1e-6
+        assert ref(t)[1] == pytest.approx((ref(t + h)[0] - ref(t - h)[0]) / (2 * h), rel=1e-6, abs=1e-9)
+
+
 def test_leg_force_is_errata_8_pa_lengthens_the_spring():
     # F_w = k_w (l1 + pa - w) - v_w wd = 2e4 (0.868 + 0.01 - 0.85) - 500 * 0.1 = 510
     assert leg_force(0.85, 0.1, 2e4, 500.0, 0.868, 0.01) == pytest.approx(510.0)
@@ -100,7 +121,8 @@ def test_hip_height_reference_ends_low_peaks_mid_step_with_flat_ends():
 def stance_setup():
     ctx = body_context(BODY)
     ctx.update(k_w=2e4, v_w=500.0, k_t=300.0, d_t=40.0, theta2_ref=0.05, k_y=10.0, c_y=0.05, t_off=0.24,
-               t_step=0.6, y_start=0.85, y_end=0.86, excursion=0.03, locked=0.0, theta1_target=0.3, w_target=0.87)
+               t_step=0.6, y_start=0.85, y_end=0.86, excursion=0.03, hip_rise=0.5, hip_fall=0.5, hip_fall_power=1.0,
+               locked=0.0, theta1_target=0.3, w_target=0.87)
     p = dict(F_theta1_magnitude=30.0, pa_offset=0.01, F_theta1_brake=-5.0,
              **{k: 0.001 * i for i, k in enumerate(PA_KNOTS)})
     return ctx, p

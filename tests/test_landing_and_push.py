@@ -1,7 +1,8 @@
 """Where the virtual leg meets the swing (docs/body.md): the landing with the knee flexed where a
-straight leg cannot follow the stance leg's compression (kinematics/landing.py), the push-off that
-begins in single support where the double support is short (kinematics/pitch_rules.py), and the
-swing foot's ground guard on a steep foot (body_motion/swing_foot_guard.py)."""
+straight leg cannot follow the stance leg's compression (kinematics/landing.py), the knee's
+push-off flexion that begins in single support whatever the double support
+(kinematics/pitch_rules.py), and the swing foot's ground guard on a steep foot
+(body_motion/swing_foot_guard.py)."""
 import math
 
 import numpy as np
@@ -11,7 +12,6 @@ from klaw_ocp.body import Body
 from klaw_ocp.body_motion.swing_foot_guard import ground_limits
 from klaw_ocp.dynamics.points import stance_hip
 from klaw_ocp.kinematics.landing import LANDING_JOINT_RATE, LANDING_KNEE_MAX, starting_rates
-from klaw_ocp.kinematics.pitch_rules import MIN_PUSH_OFF, REACH_FRACTION
 from klaw_ocp.kinematics.swing_foot import SwingFoot
 from klaw_ocp.walk import simulate_walk
 
@@ -57,8 +57,8 @@ def test_the_natural_walk_lands_straight(natural):
 def test_a_fast_walk_lands_on_a_flexed_knee_whose_joints_start_within_the_rate(fast):
     """At 8 km/h the straight leg's foot would have to come down at about 1900°/s: the leg lands
     with the knee flexed (the least flexion tried that keeps thigh, knee and ankle at most
-    LANDING_JOINT_RATE), its heel on the planned point and its foot more toe-up than the straight
-    leg's."""
+    LANDING_JOINT_RATE, or at the most flexion tried the least largest rate), its heel on the
+    planned point and its foot more toe-up than the straight leg's."""
     body = fast.spec.body
     flexed = 0
     for _, foot, hip, velocity in _landings(fast):
@@ -68,7 +68,11 @@ def test_a_fast_walk_lands_on_a_flexed_knee_whose_joints_start_within_the_rate(f
         assert 0 <= foot.landing_knee <= LANDING_KNEE_MAX
         if foot.landing_knee > 0:
             flexed += 1
-            assert np.abs(starting_rates(foot, hip, velocity)).max() <= LANDING_JOINT_RATE * (1 + 1e-9)
+            largest = np.abs(starting_rates(foot, hip, velocity)).max()
+            # within the rate, or the most flexion tried and the least largest rate there (1-2 %
+            # over it at 8 km/h since the hip holds its height into terminal stance, issue #34)
+            assert largest <= LANDING_JOINT_RATE * (1 + 1e-9) or (
+                foot.landing_knee == pytest.approx(LANDING_KNEE_MAX) and largest <= 1.05 * LANDING_JOINT_RATE)
             assert foot.rocker_pitch < 0
     assert flexed >= 2
 
@@ -87,21 +91,22 @@ def test_the_swing_leg_of_a_fast_walk_lands_without_a_jump(fast):
 
 
 def test_a_short_double_support_starts_the_push_off_in_single_support():
-    """configs/short_steps.yaml's cadence: eq. 2 gives a double support of 17 ms; the push-off's
-    line begins MIN_PUSH_OFF before toe-off, continuous with single support, and reaches the
-    toe-off pitch at toe-off."""
+    """configs/short_steps.yaml's cadence: eq. 2 gives a double support of 17 ms; the knee's
+    push-off flexion begins knee_flexion_lead of the cycle before toe-off, in single support, and
+    the pitch rises smoothly through the other leg's heel strike to the toe-off pitch."""
     walk = simulate_walk({"name": "s", "body": {"height": 1.8, "mass": 80},
                           "walk": {"speed": 5.0, "step_length": 0.5, "steps": 4}}, method="multiple-shooting")
     step = walk.steps[1]
     foot = walk.stance_foot(1)               # completed by step 2's double support
     assert foot is walk.steps[2].hind_foot and foot.complete and not step.stance_foot.complete
-    assert foot.t_toe_off - foot.t_step < MIN_PUSH_OFF
-    assert foot.t_push == pytest.approx(foot.t_toe_off - MIN_PUSH_OFF, abs=1e-12)
-    t = np.linspace(foot.t_push - 0.01, foot.t_toe_off, 400)
+    assert foot.t_toe_off - foot.t_step < 0.02
+    lead = walk.spec.attributes.knee_flexion_lead * 2 * foot.t_step
+    assert foot.t_knee == pytest.approx(foot.t_toe_off - lead, abs=1e-12) and foot.t_knee < foot.t_step - 0.05
+    t = np.linspace(foot.t_knee - 0.01, foot.t_toe_off, 400)
     hips = np.column_stack([np.interp(t, *_hip_track(walk, step, 0)), np.interp(t, *_hip_track(walk, step, 1))])
     pitch = foot.pitch(t, hips)
     assert np.all(np.diff(pitch) >= -1e-9)                             # the heel never comes down
-    assert np.abs(np.diff(pitch)).max() < math.radians(1.0)           # no jump at t_push or t_step
+    assert np.abs(np.diff(pitch)).max() < math.radians(1.0)           # no jump at t_knee or t_step
     assert pitch[-1] == pytest.approx(foot.pitch_toe_off, abs=1e-9)
 
 
@@ -113,14 +118,15 @@ def _hip_track(walk, step, axis):
     return t, np.r_[step.stance_hips[:, axis], after.stance_hips[1:, axis]]
 
 
-def test_a_walking_start_begins_with_the_hind_leg_at_its_reach(natural):
-    """The walk begins mid-stride: the hind leg of the first step is at its reach (REACH_FRACTION
-    of l1, its knee a little flexed), not straight, so its knee does not snap as the push begins."""
+def test_a_walking_start_begins_with_the_hind_leg_on_its_schedule(natural):
+    """The walk begins mid-stride: the hind leg of the first step has its knee where the knee's
+    schedule of a walk of that cycle has it (flexing for push-off), not straight, so its knee does
+    not snap as the walk begins."""
     first = natural.steps[0]
     foot, hip = first.hind_foot, first.stance_hips[0]
     legs = foot.frames(np.array([foot.t_step]), hip[None, :])
-    assert np.hypot(*(legs.ankle[0] - hip)) <= natural.spec.body.l1 * REACH_FRACTION + 1e-12
-    assert legs.theta4[0] > math.radians(4)
+    assert legs.theta4[0] == pytest.approx(float(foot.knee_schedule(np.array([foot.t_step]))[0]), abs=1e-9)
+    assert legs.theta4[0] > math.radians(8)
 
 
 def test_the_ground_guard_leaves_a_steep_foot_whose_points_cannot_reach_the_ground():

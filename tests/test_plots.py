@@ -292,7 +292,11 @@ def test_the_hip_height_plot_shows_one_bump_per_step(natural):
             # 2-4 mm dip of the monitored stance right after heel strike
             peaks = np.flatnonzero(rises[:-1] & ~rises[1:])
             big = [p for p in peaks if curve[p + 1] - curve.min() > 0.5 * (curve.max() - curve.min())]
-            assert len(big) == 1, (step["index"], peaks)
+            # and the millimetre's wobble of the monitored stance on the hip's plateau (issue #34's
+            # hip holds its height into terminal stance): peaks no deeper apart than 1 mm are one
+            apart = [(a, b) for a, b in zip(big, big[1:])
+                     if min(curve[a + 1], curve[b + 1]) - curve[a + 1:b + 2].min() > 1e-3]
+            assert len(big) >= 1 and not apart, (step["index"], peaks)
 
 
 # -- a long walk: a readable selection, and the figure says which --------------------------------

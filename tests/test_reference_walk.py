@@ -156,10 +156,17 @@ def stance_forces(x, t, p, n, before_off):
     """F_w, F_theta1, F_theta2 of section 4.2 (ERRATA 8): pa follows the hip-height sinusoid,
     plus the offset after mid-step and the piecewise-linear profile; F_theta1 a step input."""
     T, knots = n["t_step"], [p[f"pa_knot_{i}"] for i in range(len(PA_KNOTS))]
-    s = math.pi * t / T
-    y_ref = (n["y_start"] + (n["y_end"] - n["y_start"]) * 0.5 * (1 - math.cos(s))
-             + n["excursion"] * 0.5 * (1 - math.cos(2 * s)))
-    yd_ref = ((n["y_end"] - n["y_start"]) * 0.5 * math.sin(s) + n["excursion"] * math.sin(2 * s)) * math.pi / T
+
+    def reference(t):
+        """Heel-strike heights blended by a half cosine; a bump rising over hip_rise of the step
+        (half raised cosine), falling over the last hip_fall in 1 - (1 - r)^power of the fall r
+        still ahead, flat between (the paper's sinusoid for 0.5, 0.5, 1)."""
+        up = 0.5 * (1 - math.cos(math.pi * min(t / (n["hip_rise"] * T), 1.0)))
+        r = min((T - t) / (n["hip_fall"] * T), 1.0)
+        down = 0.5 * (1 - math.cos(math.pi * (1 - (1 - r) ** n["hip_fall_power"])))
+        return n["y_start"] + (n["y_end"] - n["y_start"]) * 0.5 * (1 - math.cos(math.pi * t / T)) + n["excursion"] * up * down
+    h = 1e-7
+    y_ref, yd_ref = reference(t), (reference(min(t + h, T)) - reference(max(t - h, 0.0))) / (min(t + h, T) - max(t - h, 0.0))
     late = 0.5 * (1 - math.cos(math.pi * max(0.0, 2 * t / T - 1)))
     y, yd = hip_height(x)
     pa = (p["pa_offset"] * late + np.interp(t / T, np.linspace(0, 1, len(knots)), knots)

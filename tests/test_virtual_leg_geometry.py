@@ -1,7 +1,7 @@
 """The virtual leg's geometry (kinematics/virtual_leg.py) held against independently rebuilt
 geometry, without a walk: the foot's periods (heel-up about the metatarsal head with the toe flat,
-then about the toe tip), the two-link inverse kinematics, the reach pitch, the toe-off pitch and
-the ankle angle. (The same properties once held for control/double_support.py's hind leg.)"""
+then, through a C1 band about meta-off, about the toe tip), the two-link inverse kinematics, the
+reach pitch, the knee's schedule in the double support, the toe-off pitch and the ankle angle."""
 import math
 from dataclasses import replace
 
@@ -12,8 +12,10 @@ from hypothesis import example, given, settings, strategies as st
 from klaw_ocp.body import Body
 from klaw_ocp.dynamics.points import foot_points_float
 from klaw_ocp.gait.attributes import LocomotionAttributes
-from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, PUSH_EASE_FROM_REST, REACH_FRACTION, FlatFoot,
-                                             StanceFoot, ankle_angle, hind_foot_at_rest, leg_ik, toe_off_pitch)
+from klaw_ocp.kinematics.leg_geometry import knee_flexion_for_reach, reach_for_knee_flexion
+from klaw_ocp.kinematics.pitch_rules import REACH_FRACTION
+from klaw_ocp.kinematics.virtual_leg import (MIN_SWING1_THIGH_TRAVEL, FlatFoot, StanceFoot, ankle_angle,
+                                             hind_foot_at_rest, leg_ik, toe_off_pitch)
 
 BODY = Body(1.8, 80)
 ATTRS = LocomotionAttributes.defaults()
@@ -33,16 +35,33 @@ def clockwise(v, a):
     return np.array([v[0] * math.cos(a) + v[1] * math.sin(a), -v[0] * math.sin(a) + v[1] * math.cos(a)])
 
 
+BAND = math.radians(12.0)                            # the meta-off blend's half width (q/2 at most)
+
+
+def toe_joint(p, q=Q):
+    """θ6 of the heel-up foot: the pitch, then held at q, joined by a parabola over q ± BAND whose
+    slope runs from 1 to 0 (rebuilt here from that description)."""
+    w = min(BAND, q / 2)
+    if p <= q - w:
+        return p
+    if p >= q + w:
+        return q
+    return p - (p - q + w) ** 2 / (4 * w)
+
+
 def pitched(p, ankle_x=ANKLE_X, body=BODY, q=Q):
-    """Heel, ankle, metatarsal head, toe tip of a foot with its heel raised by pitch p >= 0: turned
-    clockwise about the metatarsal head up to q (the toe flat), then about the toe tip."""
+    """Heel, ankle, metatarsal head, toe tip of a foot with its heel raised by pitch p >= 0: the
+    toe tip on the ground, the toe segment turned up by p - θ6 about it, the rest of the foot
+    turned clockwise by p about the metatarsal head, wherever the toe segment puts the head."""
     off = math.sqrt(body.l12 ** 2 - body.l9 ** 2)
     head, ankle = np.array([ankle_x + off, 0.0]), np.array([ankle_x, body.l9])
-    rest = {"heel": np.array([ankle_x - body.l8, 0.0]), "ankle": ankle, "metatarsal": head,
-            "toe": head + np.array([body.l13, 0.0])}
-    toe = rest["toe"]
-    first = {k: head + clockwise(v - head, min(p, q)) if k != "toe" else v for k, v in rest.items()}
-    return {k: toe + clockwise(v - toe, max(p - q, 0.0)) for k, v in first.items()}
+    toe = head + np.array([body.l13, 0.0])
+    rise = p - toe_joint(p, q)
+    new_head = toe + body.l13 * np.array([-math.cos(rise), math.sin(rise)])
+    rest = {"heel": np.array([ankle_x - body.l8, 0.0]), "ankle": ankle, "metatarsal": head}
+    out = {k: new_head + clockwise(v - head, p) for k, v in rest.items()}
+    out["toe"] = toe
+    return out
 
 
 def standing_foot(ankle_x=ANKLE_X):
@@ -67,8 +86,8 @@ def test_the_metatarsal_head_is_l12_from_the_flat_ankle():
 
 
 @FAST
-@given(p=st.floats(0.0, Q))
-@example(p=Q)
+@given(p=st.floats(0.0, Q - BAND))
+@example(p=Q - BAND)
 def test_heel_up_about_the_metatarsal_head_keeps_head_and_toe_down_and_the_toe_flat(p):
     pose = FlatFoot(BODY, ANKLE_X).pose(np.array([p]), Q)
     assert one(pose, "metatarsal") == pytest.approx([M_X, 0.0], abs=1e-15)
@@ -81,7 +100,7 @@ def test_heel_up_about_the_metatarsal_head_keeps_head_and_toe_down_and_the_toe_f
 
 
 @FAST
-@given(p=st.floats(Q, 1.5, exclude_min=True))
+@given(p=st.floats(Q + BAND, 1.5))
 def test_beyond_meta_off_the_foot_turns_about_the_toe_tip_with_theta6_held(p):
     pose = FlatFoot(BODY, ANKLE_X).pose(np.array([p]), Q)
     toe = np.array([M_X + BODY.l13, 0.0])
@@ -91,9 +110,29 @@ def test_beyond_meta_off_the_foot_turns_about_the_toe_tip_with_theta6_held(p):
     assert head == pytest.approx(toe + BODY.l13 * np.array([-math.cos(p - Q), math.sin(p - Q)]), abs=1e-12)
     for name, point in pitched(p).items():
         assert one(pose, name) == pytest.approx(point, abs=1e-12), name
-    # continuous through meta-off
-    at_q, past = FlatFoot(BODY, ANKLE_X).pose(np.array([Q, Q + 1e-9]), Q)["ankle"]
-    assert np.linalg.norm(past - at_q) < 1e-9
+
+
+@FAST
+@given(p=st.floats(Q - BAND, Q + BAND))
+def test_about_meta_off_the_pivot_passes_from_the_head_to_the_toe_tip_with_a_continuous_rate(p):
+    """In the band θ6 stops following the pitch with a continuous slope; the toe tip stays down,
+    the foot keeps its shape, and the ankle's path has no corner (its direction turns smoothly
+    from the circle about the head to the circle about the toe tip)."""
+    foot = FlatFoot(BODY, ANKLE_X)
+    pose = foot.pose(np.array([p]), Q)
+    assert one(pose, "toe") == pytest.approx([M_X + BODY.l13, 0.0], abs=1e-15)
+    assert pose["theta6"][0] == pytest.approx(toe_joint(p), abs=1e-15)
+    for name, point in pitched(p).items():
+        assert one(pose, name) == pytest.approx(point, abs=1e-12), name
+    assert math.hypot(*(one(pose, "ankle") - one(pose, "metatarsal"))) == pytest.approx(BODY.l12, rel=1e-12)
+    h = 1e-6
+    ankles = foot.pose(np.array([p - h, p, p + h]), Q)["ankle"]
+    left, right = (ankles[1] - ankles[0]) / h, (ankles[2] - ankles[1]) / h
+    assert np.linalg.norm(right - left) < 1e-4
+    at = lambda x: foot.pose(np.array([x]), Q)["ankle"][0]
+    for edge in (Q - BAND, Q + BAND):         # the band's ends: the rigid motions' rates meet
+        left, right = (at(edge) - at(edge - h)) / h, (at(edge + h) - at(edge)) / h
+        assert np.linalg.norm(right - left) < 1e-4
 
 
 # -- the leg's inverse kinematics ----------------------------------------------------------------
@@ -142,13 +181,8 @@ def test_the_reach_fraction_bends_the_knee_about_ten_degrees():
     d = REACH_FRACTION * BODY.l1
     assert math.cos(th4) == pytest.approx((d ** 2 - BODY.l3 ** 2 - BODY.l4 ** 2) / (2 * BODY.l3 * BODY.l4))
     assert math.degrees(th4) == pytest.approx(10.25, abs=0.1)
-    # a double support raised to its reach bends the knee by that much at toe-off
-    hips = np.array([[M_X + 0.45, 0.9]])
-    foot = hind_foot_at_rest(BODY, ATTRS, ANKLE_X).with_double_support(hips[0], 0.1, 0.0)
-    leg = foot.frames(np.array([0.1]), hips)
-    assert leg.pitch[0] > 0
-    assert math.cos(leg.theta4[0]) == pytest.approx((d ** 2 - BODY.l3 ** 2 - BODY.l4 ** 2) / (2 * BODY.l3 * BODY.l4))
-    assert math.degrees(leg.theta4[0]) == pytest.approx(10.25, abs=0.1)
+    assert float(knee_flexion_for_reach(BODY, d)) == pytest.approx(th4, abs=1e-9)
+    assert float(reach_for_knee_flexion(BODY, th4)) == pytest.approx(d, rel=1e-12)
 
 
 # -- the reach pitch -----------------------------------------------------------------------------
@@ -164,8 +198,8 @@ HIPS = st.lists(st.tuples(st.floats(0.85, 1.27), st.floats(-1.1, 0.8), st.floats
 
 @FAST
 @given(hips=HIPS)
-@example(hips=[(0.9, 0.3, 1.0), (1.1, 0.1, REACH_FRACTION), (1.15, 0.0, 1.0),   # flat, heel-off, meta-off
-               (1.18, -0.86, 1.0)])        # behind the foot: the ankle comes into reach and leaves it again
+@example(hips=[(0.9, 0.3, 1.0), (1.09, 0.1, REACH_FRACTION), (1.22, 0.0, 1.0),   # flat, heel-off, meta-off
+               (1.18, -0.86, 1.0), (1.15, 0.0, 1.0)])   # behind the foot; in the meta-off band
 def test_reach_pitch_is_the_smallest_pitch_that_reaches(hips):
     xy = np.array([[M_X + r * BODY.l1 * math.sin(a), r * BODY.l1 * math.cos(a)] for r, a, _ in hips])
     fractions = np.array([f for *_, f in hips])
@@ -184,11 +218,13 @@ def test_reach_pitch_is_the_smallest_pitch_that_reaches(hips):
 
 
 def test_reach_pitch_covers_both_pivots():
-    """The example hips of the test above: one reaches flat, one about the head, one about the toe."""
-    xy = np.array([[M_X, 0.9 * BODY.l1], [M_X + 1.1 * BODY.l1 * math.sin(0.1), 1.1 * BODY.l1 * math.cos(0.1)],
-                   [M_X, 1.15 * BODY.l1]])
-    p = standing_foot().reach_pitch(xy, np.array([1.0, REACH_FRACTION, 1.0]))
-    assert p[0] == 0.0 and 0 < p[1] <= Q < p[2] < math.radians(89)
+    """The example hips of the test above: one reaches flat, one about the head, one about the toe,
+    one in the meta-off band between them."""
+    xy = np.array([[M_X, 0.9 * BODY.l1], [M_X + 1.09 * BODY.l1 * math.sin(0.1), 1.09 * BODY.l1 * math.cos(0.1)],
+                   [M_X, 1.22 * BODY.l1], [M_X, 1.15 * BODY.l1]])
+    p = standing_foot().reach_pitch(xy, np.array([1.0, REACH_FRACTION, 1.0, 1.0]))
+    assert p[0] == 0.0 and 0 < p[1] <= Q - BAND and Q + BAND < p[2] < math.radians(89)
+    assert Q - BAND < p[3] < Q + BAND and gap(p[3], xy[3], 1.0) == pytest.approx(0.0, abs=1e-10)
 
 
 # -- the double support's pitch ------------------------------------------------------------------
@@ -203,45 +239,56 @@ def check_leg(hip, leg, i):
     assert a[0] * k[1] - a[1] * k[0] > (0 if leg.theta4[i] > 1e-6 else -1e-12)   # knee forward
 
 
-def test_the_double_support_pitch_runs_linearly_to_toe_off():
-    """From rest it eases in over the first PUSH_EASE_FROM_REST of the double support (a cubic
-    with zero start rate that joins the line), then runs along the line."""
+def test_from_rest_the_double_support_flexes_the_knee_on_its_schedule_from_straight():
+    """A standing hind foot's knee schedule starts at rest, straight: κ_to s² over the double
+    support. The heel stays down while the flat foot keeps the knee above it, then rises by the
+    least pitch that keeps the knee on it; the pitch never falls."""
     hip = np.array([M_X + 0.05 * 1.8, 0.47 * 1.8])   # nearly over the head: the flat foot reaches
     foot = hind_foot_at_rest(BODY, ATTRS, ANKLE_X)
-    assert foot.reach_pitch(hip[None])[0] == 0.0 and PUSH_EASE_FROM_REST == 0.5
+    assert foot.reach_pitch(hip[None])[0] == 0.0
     foot = foot.with_double_support(hip, 0.12, 0.6)
-    t = np.array([0.0, 0.03, 0.06, 0.12, 0.2])
+    t = np.linspace(0.0, 0.12, 13)
     leg = foot.frames(t, np.tile(hip, (len(t), 1)))
-    eased = 0.6 * 0.5 * 0.5 ** 2 * (2 - 0.5)        # a·s²(2 - s) of the line's end, s = 0.03 / 0.06
-    assert leg.pitch == pytest.approx([0.0, eased, 0.3, 0.6, 0.6], abs=1e-12)   # held after toe-off
+    schedule = math.radians(ATTRS.toe_off_knee_flexion) * (t / 0.12) ** 2
+    flat = knee_flexion_for_reach(BODY, np.linalg.norm(pitched(0.0)["ankle"] - hip))
+    assert leg.pitch[0] == 0.0 and np.all(np.diff(leg.pitch) >= 0)
     for i in range(len(t)):
         check_leg(hip, leg, i)
+        if leg.pitch[i] == 0:
+            assert flat >= schedule[i] - 1e-9
+        else:
+            assert leg.theta4[i] == pytest.approx(schedule[i], abs=1e-9)
 
 
 @FAST
 @given(dist=st.floats(0.75, 1.1), lean=st.floats(-0.1, 0.7), t=st.floats(0.0, 0.15))
 def test_the_double_support_reaches_any_hip(dist, lean, t):
+    """A walking leg in its double support: the knee on its schedule wherever the heel is clear
+    of its blend, never straighter than it, and a leg of its own segments throughout."""
     hip = np.array([M_X, 0.0]) + dist * BODY.l1 * unit(lean)
-    foot = replace(hind_foot_at_rest(BODY, ATTRS, ANKLE_X), t_toe_off=0.1, pitch_toe_off=math.radians(45))
+    foot = hind_foot_at_rest(BODY, ATTRS, ANKLE_X, from_rest=False, t_cycle=1.1, t_ds=0.1)
+    foot = foot.with_double_support(hip, 0.1, 0.0)
     leg = foot.frames(np.array([t]), hip[None])
     check_leg(hip, leg, 0)
-    through = min(1.0, t / 0.1)
-    if through < PUSH_EASE_FROM_REST:                                # easing in from rest
-        s = through / PUSH_EASE_FROM_REST
-        through = PUSH_EASE_FROM_REST * s * s * (2 - s)
-    interpolated = math.radians(45) * through
-    assert leg.pitch[0] >= interpolated - 1e-12                      # raised only, never lowered
-    if leg.pitch[0] > interpolated + 1e-9:                           # raised exactly to the reach
-        fraction = 1 - (1 - REACH_FRACTION) * through
-        assert np.linalg.norm(leg.ankle[0] - hip) == pytest.approx(fraction * BODY.l1, rel=1e-9)
+    schedule = float(foot.knee_schedule(np.array([t]))[0])
+    flat = float(np.linalg.norm(pitched(0.0)["ankle"] - hip))
+    if leg.pitch[0] == 0:
+        assert flat <= float(reach_for_knee_flexion(BODY, schedule)) - foot.heel_blend + 1e-12
+    elif leg.pitch[0] < math.radians(89):
+        assert leg.theta4[0] >= schedule - 1e-9
+        if flat >= float(reach_for_knee_flexion(BODY, schedule)) + foot.heel_blend:
+            assert leg.theta4[0] == pytest.approx(schedule, abs=1e-9)
 
 
 def test_toe_off_pitch_keeps_the_attribute_in_steady_walking():
     foot, hip = standing_foot(), np.array([M_X + 0.35, 0.9])
-    wanted = math.radians(ATTRS.toe_off_foot_pitch)
+    knee = math.radians(ATTRS.toe_off_knee_flexion)
+    wanted = float(foot.reach_pitch(hip[None], reach_for_knee_flexion(BODY, knee) / BODY.l1)[0])
     start = float(foot.reach_pitch(hip[None], REACH_FRACTION)[0])
     assert 0 < start < wanted
     assert toe_off_pitch(foot, hip, start, wanted, -0.35) == wanted
+    theta4 = leg_ik(BODY, hip[None], pitched(wanted)["ankle"][None])[1][0]
+    assert theta4 == pytest.approx(knee, abs=1e-9)
 
 
 def test_toe_off_pitch_from_standing_stops_the_thigh_at_its_bound():

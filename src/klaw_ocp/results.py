@@ -121,7 +121,9 @@ def _hip_reference_curves(steps, body, times: list) -> list:
     sizes = [len(t) for t, r in zip(times, ref) if r]
     per_row = lambda f: ca.DM(np.repeat([f(step) for step, r in zip(steps, ref) if r], sizes))
     t_local = np.concatenate([np.asarray(t, float) - step.t_start for step, t, r in zip(steps, times, ref) if r])
-    shape = (per_row(lambda s, k=k: s.hip_reference[k]) for k in ("y_start", "y_end", "excursion"))
+    shape = [per_row(lambda s, k=k: s.hip_reference[k]) for k in ("y_start", "y_end", "excursion")]
+    # (a result from before the bump's shape was recorded had the paper's mid-step sinusoid)
+    shape += [per_row(lambda s, k=k, v=v: s.hip_reference.get(k, v)) for k, v in (("rise", 0.5), ("fall", 0.5), ("power", 1.0))]
     y, _ = hip_height_reference(ca.DM(t_local), per_row(lambda s: s.plan.timings.t_step), *shape)
     values = iter(np.split(np.asarray(y, float).ravel() + body.l9, np.cumsum(sizes)[:-1]))
     for i, r in enumerate(ref):

@@ -114,23 +114,36 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
         stance = controller.solve_stance(plan, inp, 0)
         return stance_hip(controller.body, stance.final_state, np.zeros(2))[1][0] - speed
 
-    v0, v1 = 1.2 * mean, 1.35 * mean
-    f0, f1 = mismatch(v0), mismatch(v1)
+    v0 = 1.2 * mean
+    f0 = mismatch(v0)
+    # the second trial speed: the first of these whose stance has a solution (a stance that only
+    # just locks its leg can have none at 1.35 of the mean speed: 1 km/h at 1.8 m in plain shooting)
+    for ratio in (1.35, 1.05, 1.3, 1.1):
+        try:
+            v1 = ratio * mean
+            f1 = mismatch(v1)
+            break
+        except ConvergenceError:
+            if ratio == 1.1:
+                raise
     for _ in range(30):
         if abs(f1) < tol or f1 == f0:
             break
         # a secant step limited to 20 % of the mean speed: far from the orbit the first stance
         # may have no solution at all
         step = float(np.clip(-f1 * (v1 - v0) / (f1 - f0), -0.2 * mean, 0.2 * mean))
-        for _ in range(6):   # a trial speed whose stance has no solution: go half as far
+        # a trial speed whose stance has no solution: go half as far, or past it (plain shooting
+        # fails on narrow bands of speeds where a lock event meets a grid node; the mismatch itself
+        # is smooth across them)
+        for factor in (1.0, 0.5, 1.5, 0.25, 2.0, 0.125):
             try:
-                f_new = mismatch(v1 + step)
+                f_new = mismatch(v1 + factor * step)
                 break
             except ConvergenceError:
-                step *= 0.5
+                continue
         else:
             raise ConvergenceError(0, "stance", abs(f1), "no periodic start found (initial hip speed)")
-        v0, v1, f0, f1 = v1, v1 + step, f1, f_new
+        v0, v1, f0, f1 = v1, v1 + factor * step, f1, f_new
     return _walking_state(con, v1, theta2)
 
 
@@ -208,10 +221,14 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             walk.initial_state = inp.x0.copy()
             # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
             # the next step's hind leg, whose toe-off starts that step's swing1
-            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest)
+            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
+                                              plans[0].timings.t_cycle, plans[0].timings.t_ds)
             for k in range(len(plans)):
                 interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
                 plan = plans[k]
+                # this stance leg's toe-off ends the next step's double support: its knee schedule
+                # runs to that toe-off (this step's own where there is no next step)
+                inp.next_t_ds = plans[k + 1].timings.t_ds if k + 1 < len(plans) else None
                 result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
                 # the step's stance leg is the next step's hind leg, whose double support completes it
                 next_inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)

@@ -29,14 +29,14 @@ def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> V
     geometry = replace(first, foot=FlatFoot(first.foot.body, 0.0))
     rules = {name: np.array([getattr(f, name) for f in feet], float)[which] for name in RULE_FIELDS}
 
-    def held(t, rows):
+    def deficit(t, rows):
         kept, stance = np.zeros(int(rows.sum())), which[rows]
         for k in np.unique(stance):
-            if feet[k].single_t:
+            if feet[k].single_t and any(feet[k].single_deficit):
                 mine = stance == k
-                kept[mine] = np.interp(t[rows][mine], feet[k].single_t, feet[k].single_pitch)
+                kept[mine] = np.interp(t[rows][mine], feet[k].single_t, feet[k].single_deficit, right=0.0)
         return kept
-    pitch, fraction = rule_pitch(rules, t, local, geometry.reach_pitch, held)
+    pitch, fraction = rule_pitch(rules, t, local, geometry, deficit)
     rocker_theta6 = np.array([f.rocker_theta6 for f in feet])[which]
     legs = leg_frames(geometry, t, local, pitch, fraction, rocker_theta6, rules["t_flat"])
     moved = {name: getattr(legs, name) + shift for name in ("hip", "knee", "ankle", "heel", "metatarsal", "toe")}

@@ -70,6 +70,9 @@ class StepInput:
     hind_foot: StanceFoot | None = None
     #: the stance foot stands flat from the start, with no heel strike (a walk from rest's first step)
     stance_standing: bool = False
+    #: the next step's double support (s), which ends with this stance leg's toe-off; None: the
+    #: walk's last step (its own double support stands in)
+    next_t_ds: float | None = None
 
 
 @dataclass(frozen=True)
@@ -92,7 +95,8 @@ class StepResult:
     plan: StepPlan
     notes: list[str]
     #: the hip-height sinusoid the stance is guided towards (§4.2), in the stance ankle's frame:
-    #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m
+    #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m,
+    #: and the bump's ``rise`` and ``fall`` (fractions of the step) and the fall's ``power``
     hip_reference: dict
     #: the hind leg's virtual leg, completed by this step's double support (the previous stance
     #: leg's rules with their toe-off), and its samples there: (leg stance times, world hips (n, 2))
@@ -158,7 +162,9 @@ class StepController:
         ctx = body_context(b)
         ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=g.theta2_ref, k_y=g.k_y, c_y=g.c_y,
                    t_off=t.t_theta1_off, t_step=t.t_step, y_start=inp.y_start,
-                   y_end=plan.constraints.hip_y - b.l9, excursion=inp.excursion, locked=0.0,
+                   y_end=plan.constraints.hip_y - b.l9, excursion=inp.excursion,
+                   hip_rise=self.attrs.hip_rise_fraction, hip_fall=self.attrs.hip_fall_fraction,
+                   hip_fall_power=self.attrs.hip_fall_power, locked=0.0,
                    theta1_target=plan.constraints.theta1, w_target=plan.constraints.w)
         return ctx
 
@@ -223,7 +229,8 @@ class StepController:
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
-        stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing)
+        stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing,
+                                       inp.next_t_ds)
         ds = hind_leg_double_support(self.attrs, plan, stance, hips, hip_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
         curve = plan_curve_p(b, self.attrs, plan, ds, hips[node_at(stance.t, t1)])
@@ -238,7 +245,8 @@ class StepController:
                           heel_clearance_min=self.heel_clearance_min(swings[-1], c),
                           plan=plan, notes=lock_rule_notes(stance, b.l1),
                           hip_reference={"y_start": inp.y_start, "y_end": stance_ctx["y_end"],
-                                         "excursion": inp.excursion},
+                                         "excursion": inp.excursion, "rise": stance_ctx["hip_rise"],
+                                         "fall": stance_ctx["hip_fall"], "power": stance_ctx["hip_fall_power"]},
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
                           stance_hips=hips, swing_foot=curve.swing_foot)
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..body import Body
 from ..dynamics import stance_hip
+from ..kinematics.leg_geometry import reach_for_knee_flexion
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
@@ -100,17 +101,20 @@ def node_at(t_nodes: np.ndarray, time: float) -> int:
 
 
 def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
-                     standing: bool = False) -> StanceFoot:
+                     standing: bool = False, next_t_ds: float | None = None) -> StanceFoot:
     """The virtual leg's rules for the stance leg of a step (§4.2), from its solved ``stance`` and
     the world hips at its nodes ``hips``: its heel-strike foot from the first hip (flat from the
-    start where it is ``standing``: the first step of a walk from rest), its heel-off from the
-    stance's hips. The next step's double support completes them (:func:`hind_leg_double_support`)."""
+    start where it is ``standing``: the first step of a walk from rest), its knee's schedule to
+    the toe-off that ends the next step's double support (``next_t_ds``; this step's where there
+    is no next step), its heel-off from the stance's hips. The next step's double support
+    completes them (:func:`hind_leg_double_support`)."""
     t_step = plan.timings.t_step
+    t_ds_next = plan.timings.t_ds if next_t_ds is None else next_t_ds
     if standing:
-        foot = StanceFoot.standing(body, attrs, origin_x, t_step)
+        foot = StanceFoot.standing(body, attrs, origin_x, t_step, t_ds_next)
     else:
         _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
-        foot = StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity)
+        foot = StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity, t_ds_next)
     return foot.find_heel_off(stance.t, hips)
 
 
@@ -123,8 +127,11 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
     hip_to, hip_vel_to = hips[k_to], hip_vels[k_to]
     t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
     pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
-    pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, math.radians(attrs.toe_off_foot_pitch), plan.constraints.theta3)
-    hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds)
+    # the pitch at which the knee has its toe-off flexion (the knee's schedule ends there)
+    reach = float(reach_for_knee_flexion(hind.foot.body, hind.knee_toe_off)) / hind.foot.body.l1
+    wanted = float(hind.reach_pitch(hip_to[None], reach)[0])
+    pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, wanted, plan.constraints.theta3)
+    hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds, hip_toe_off=hip_to)
     ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
     # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
     # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached

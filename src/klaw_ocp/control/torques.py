@@ -54,19 +54,36 @@ def piecewise_linear(s, knots):
     return sum(knot * ca.fmax(0, 1 - ca.fabs(s - i)) for i, knot in enumerate(knots))
 
 
-def hip_height_reference(t, duration, y_start, y_end, excursion):
+def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=0.5, power=1.0):
     """The vertical sinusoid of the hip over one step (§4.2, after Inman) and its rate.
 
-    Lowest at both heel strikes, highest at mid-step: ``y_start`` blends into ``y_end`` (the two
-    heel-strike heights differ when the step length changes) and a raised-cosine bump of height
-    ``excursion`` peaks at ``duration / 2``. Both end slopes are zero, so the hip's vertical
-    velocity is continuous across the heel-strike map.
+    Lowest at both heel strikes: ``y_start`` blends into ``y_end`` (the two heel-strike heights
+    differ when the step length changes) and a bump of height ``excursion`` rises over the first
+    ``rise`` of the step and falls over its last ``fall`` (fractions of ``duration``), each a half
+    raised cosine, and holds its height between them; the fall's raised cosine runs in
+    1 - (1 - r)^power of the fraction r of the fall still ahead, so that a power above 1 starts
+    the fall gently and ends it steeply. With ``rise = fall = 1/2`` and ``power`` 1 (the paper's
+    reading) it is the raised cosine 0.5 (1 - cos 2 pi t / duration) that peaks at mid-step. Both end
+    slopes are zero, so the hip's vertical velocity is continuous across the heel-strike map.
+
+    People's hip stays high through terminal stance while the heel rises and keeps the leg long,
+    and comes down in pre-swing (docs/human-gait.md): the attributes ``hip_rise_fraction``,
+    ``hip_fall_fraction`` and ``hip_fall_power`` shape it so; the hip that falls no faster than the
+    leg's reach allows keeps the stance knee on its schedule (kinematics/pitch_rules.py).
     """
     s = ca.pi * t / duration
     blend = 0.5 * (1 - ca.cos(s))
-    bump = 0.5 * (1 - ca.cos(2 * s))
-    y = y_start + (y_end - y_start) * blend + excursion * bump
-    yd = ((y_end - y_start) * 0.5 * ca.sin(s) + excursion * ca.sin(2 * s)) * ca.pi / duration
+    up = ca.pi * ca.fmin(t / (rise * duration), 1)
+    ahead = ca.fmin((duration - t) / (fall * duration), 1)      # 1 where the fall begins, 0 at the end
+    # (1 - ahead) kept off 0, where the power's derivative is infinite and the solvers' Jacobians
+    # would multiply it by 0: NaN; 1e-30 ** power (power >= 1) changes nothing a solver can see
+    since = ca.fmax(1 - ahead, 1e-30)
+    down = ca.pi * (1 - since ** power)
+    bump_up, bump_down = 0.5 * (1 - ca.cos(up)), 0.5 * (1 - ca.cos(down))
+    y = y_start + (y_end - y_start) * blend + excursion * bump_up * bump_down
+    down_rate = power * since ** (power - 1) / fall     # d(down / pi)/d(t / duration), while falling
+    yd = ((y_end - y_start) * 0.5 * ca.sin(s) * ca.pi / duration
+          + excursion * 0.5 * ca.pi / duration * (ca.sin(up) / rise * bump_down - bump_up * ca.sin(down) * down_rate))
     return y, yd
 
 

@@ -98,14 +98,23 @@ _SPECS = [
     _spec("foot", "foot_flat_fraction", "1", 0.08, 0.02, 0.2,
           "§4.2: the normal period's foot 'rotates around the heel until it is flat'; when (fraction "
           "of the cycle after heel strike; about 8 % in people) " + _OURS),
-    _spec("foot", "heel_off_theta5", "deg", 112.0, 90.0, 130.0,
+    _spec("foot", "heel_off_theta5", "deg", 105.0, 90.0, 130.0,
           "§4.2: 'the normal period ends when the ankle angle θ5 reaches a limiting value'; θ5 from "
           "the shank's axis to the foot's, 90° neutral, more as the shank leans over the flat foot "
-          "(about 10° of dorsiflexion at heel-off in people); value " + _OURS),
+          "(8-15° of dorsiflexion in people's terminal stance; the knee's schedule usually lifts the "
+          "heel first); value " + _OURS),
     _spec("foot", "meta_off_theta6", "deg", 30.0, 0.0, 60.0,
           "§4.2: 'as soon as θ6 reaches a limit, the meta-off period is entered'"),
-    _spec("foot", "toe_off_foot_pitch", "deg", 45.0, 10.0, 80.0,
-          "§4.2 meta-off ends at toe-off; the foot pitch there is " + _OURS),
+    _spec("foot", "terminal_stance_knee_flexion", "deg", 5.0, 0.5, 20.0,
+          "§4.2 heel-off period (what the foot does after heel-off is not in the paper): the least "
+          "knee flexion of single support; where the flat foot would straighten the leg further the "
+          "heel rises (people: about 5° in terminal stance), " + _OURS),
+    _spec("foot", "knee_flexion_lead", "1", 0.22, 0.05, 0.4,
+          "§4.2 heel-off and meta-off periods: when the knee starts flexing for push-off, as a "
+          "fraction of the cycle before toe-off (people: from about 40 % of the cycle), " + _OURS),
+    _spec("foot", "toe_off_knee_flexion", "deg", 40.0, 5.0, 70.0,
+          "§4.2 meta-off ends at toe-off, where swing1 starts; the knee flexion there, which fixes the "
+          "foot's pitch (people: 35-40° at the end of pre-swing), " + _OURS),
     # -- swing (section 4.3)
     _spec("swing", "toe_clearance", "m", 0.015, 0.0, 0.1,
           "§4.3 swing2 recovery 'until the foot clears the ground'; toe clearance is one of the "
@@ -143,8 +152,21 @@ _SPECS = [
           "§4.2: 'if it drops too low, pa is increased'; gain of pa on the hip-height error, " + _OURS),
     _spec("stance", "hip_height_rate_gain", "s", 0.05, 0.0, 10.0,
           "§4.2 pa monitoring; gain on the hip vertical velocity, " + _OURS),
-    _spec("stance", "midstance_leg_shortening", "l1", 0.01, 0.0, 0.2,
+    _spec("stance", "midstance_leg_shortening", "l1", 0.004, 0.0, 0.2,
           "§4.2: 'the leg does not shorten much after heel strike'; target shortening, " + _OURS),
+    _spec("stance", "hip_rise_fraction", "1", 0.5, 0.1, 0.9,
+          "§4.2: the hip 'prescribes a vertical sinusoidal curve'; the fraction of the step over which "
+          "it rises from its heel-strike height (0.5 with hip_fall_fraction 0.5: the sinusoid peaking at "
+          "mid-step), " + _OURS),
+    _spec("stance", "hip_fall_fraction", "1", 0.45, 0.1, 0.9,
+          "§4.2 the hip's vertical sinusoid; the fraction of the step over which it falls to the next "
+          "heel strike (0.5: the paper's sinusoid; less: it holds its height into terminal stance, as "
+          "people's hip does while the heel rises), " + _OURS),
+    _spec("stance", "hip_fall_power", "1", 1.5, 1.0, 3.0,
+          "§4.2 the hip's vertical sinusoid; the fall's raised cosine runs in 1 - (1 - r)^power of the "
+          "fraction r of the fall ahead (1: the paper's sinusoid; more: the hip comes down gently in "
+          "terminal stance, no faster than the rising heel keeps the knee on its schedule, and "
+          "steeply in pre-swing), " + _OURS),
     _spec("stance", "min_hip_excursion_rel", "l1", 0.01, 0.0, 0.2,
           "§4.2: the hip 'prescribes a vertical sinusoidal curve'; minimum excursion, " + _OURS),
     # -- determinants of gait and upper body (section 4.2, 2.4 principle 3)

@@ -120,13 +120,15 @@ class FlatFoot:
     def pose(self, pitch, meta_off_theta6: float, rocker_theta6=0.0) -> dict:
         """Heel, ankle, metatarsal head, toe tip (n, 2), θ6 and the sole's counter-clockwise angle
         (n,) at foot pitch ``pitch`` (n,): about the heel for p < 0 (with the toe angle
-        ``rocker_theta6``), about the metatarsal head for 0 <= p <= meta_off_theta6 (toe flat:
-        θ6 = p), about the toe tip beyond (θ6 held at meta_off_theta6)."""
+        ``rocker_theta6``); heel up with the toe tip on the ground for p >= 0, the toe joint
+        following the pitch (θ6 = p: about the metatarsal head, the toe flat) until near
+        ``meta_off_theta6`` and then held there (about the toe tip), blended C1 over
+        META_OFF_BLEND either side of it (:func:`toe_flexion`)."""
         p = np.atleast_1d(np.asarray(pitch, float))
         q = meta_off_theta6
         heel, ankle, metatarsal = foot_pieces(self.body, q).turned(self.ankle_x, p).transpose(1, 0, 2)
         rocker = p < 0
-        theta6 = np.where(rocker, rocker_theta6, np.minimum(p, q))
+        theta6 = np.where(rocker, rocker_theta6, toe_flexion(p, q))
         toe = np.empty((len(p), 2))
         toe[:] = self.toe        # on the ground unless rocking
         if rocker.any():   # toe-up about the heel: the whole foot turns; the toe keeps its angle to the foot
@@ -137,30 +139,56 @@ class FlatFoot:
 
 #: the points of :class:`FootPieces`, in its order
 ANKLE = slice(1, 2)          # the ankle row of the foot pieces (heel, ankle, metatarsal head)
+#: The half width (rad) of the pitch band about meta-off (θ6 at its limit q) over which the toe
+#: joint stops following the pitch: the heel-up foot's pivot moves from the metatarsal head to the
+#: toe tip with a continuous rate. A hard switch at q jumped the pitch rate (hence the ankle's,
+#: 120 deg/s at 100 fps) and the toe's rate (from the pitch rate to 0, 360 deg/s) at meta-off.
+META_OFF_BLEND = math.radians(12.0)
+
+
+def meta_off_band(q: float) -> float:
+    """The half width of the meta-off blend for the limit ``q`` (narrower where q is small, so that
+    the toe joint follows the flat foot's first pitch)."""
+    return min(META_OFF_BLEND, 0.5 * q)
+
+
+def toe_flexion(p, q: float):
+    """θ6 of the heel-up foot at pitch ``p`` >= 0 with the meta-off limit ``q``: p up to q - w, q
+    from q + w, the C1 parabola p - (p - q + w)²/(4 w) between (w = :func:`meta_off_band`)."""
+    w = meta_off_band(q)
+    p = np.asarray(p, float)
+    if w <= 0:
+        return np.minimum(p, q)
+    v = p - q
+    return np.where(v <= -w, p, np.where(v >= w, q, p - (v + w) ** 2 / (4 * w)))
 
 
 @dataclass(frozen=True)
 class FootPieces:
-    """A flat foot's three rigid motions, its ankle at x = 0: toe-up about the heel (p < 0),
-    heel-up about the first metatarsal head (0 <= p <= meta-off q), about the toe tip beyond.
-    Each piece's pivot (3, 2), the pitch it starts at (3,), and the heel, ankle and metatarsal head
-    there less the pivot (3 pieces, 3 points, 2). At pitch p every point is turned
-    counter-clockwise by p0 - p about its piece's pivot from where it was at p0."""
+    """A flat foot's motions, its ankle at x = 0: toe-up about the heel (p < 0); heel up (p >= 0)
+    with the toe tip on the ground, the toe segment turned up by p - θ6(p) (:func:`toe_flexion`), so
+    the rest of the foot, rigid, turns clockwise by p about the metatarsal head wherever the toe
+    segment puts it. ``heel_offsets``, ``meta_offsets``: the heel, ankle and metatarsal head of the
+    flat foot less the heel and less the metatarsal head (3, 2); ``toe``: the toe tip (2,)."""
     q: float
-    pivot: np.ndarray
-    p0: np.ndarray
-    offsets: np.ndarray
+    heel: np.ndarray
+    toe: np.ndarray
+    l13: float
+    heel_offsets: np.ndarray
+    meta_offsets: np.ndarray
 
     def turned(self, ankle_x: float, p: np.ndarray, points=slice(None)) -> np.ndarray:
         """The foot's ``points`` (n, len(points), 2) at pitches ``p`` (n,), its flat ankle at
         ``ankle_x``."""
-        k = (p >= 0).astype(np.intp) + (p > self.q)              # the piece
-        turn = (self.p0[k] - p)[:, None]
-        c, s = np.cos(turn), np.sin(turn)
-        pivot, v = self.pivot[k], self.offsets[k, points]
+        rocker = (p < 0)[:, None]
+        beta = np.where(p < 0, 0.0, p - toe_flexion(np.maximum(p, 0.0), self.q))   # the toe segment's rise
+        pivot_x = np.where(rocker[:, 0], self.heel[0], self.toe[0] - self.l13 * np.cos(beta)) + ankle_x
+        pivot_y = np.where(rocker[:, 0], self.heel[1], self.l13 * np.sin(beta))
+        v = np.where(rocker[:, :, None], self.heel_offsets[points], self.meta_offsets[points])
+        c, s = np.cos(p)[:, None], np.sin(p)[:, None]
         out = np.empty(v.shape)
-        out[..., 0] = (pivot[:, 0, None] + ankle_x) + (c * v[..., 0] - s * v[..., 1])
-        out[..., 1] = pivot[:, 1, None] + (s * v[..., 0] + c * v[..., 1])
+        out[..., 0] = pivot_x[:, None] + (c * v[..., 0] + s * v[..., 1])
+        out[..., 1] = pivot_y[:, None] + (-s * v[..., 0] + c * v[..., 1])
         return out
 
 
@@ -168,12 +196,10 @@ class FootPieces:
 def foot_pieces(body: Body, meta_off_theta6: float) -> FootPieces:
     """:class:`FootPieces` of the body's foot whose toe stops turning at ``meta_off_theta6``
     (computed once: every pitch asks for them)."""
-    q, foot = meta_off_theta6, FlatFoot(body, 0.0)
-    heel, ankle, meta, toe = foot.heel, foot.ankle, foot.metatarsal, foot.toe
-    at_q = _rotate(np.array([heel, ankle]), meta, np.full(2, -q))      # the heel and ankle at meta-off
-    pivot = np.array([heel, meta, toe])
-    points = np.array([[heel, ankle, meta], [heel, ankle, meta], [at_q[0], at_q[1], meta]])
-    return FootPieces(q, _readonly(pivot), _readonly([0.0, 0.0, q]), _readonly(points - pivot[:, None]))
+    foot = FlatFoot(body, 0.0)
+    points = np.array([foot.heel, foot.ankle, foot.metatarsal])
+    return FootPieces(meta_off_theta6, _readonly(foot.heel), _readonly(foot.toe), body.l13,
+                      _readonly(points - foot.heel), _readonly(points - foot.metatarsal))
 
 
 def ankle_angle(theta3, theta4, sole) -> np.ndarray:

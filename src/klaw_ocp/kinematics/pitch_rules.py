@@ -1,8 +1,30 @@
 """The foot's pitch through one stance (§4.2's three periods), as functions of the stance time: the
-rocker about the heel after heel strike, single support's heel rise, and the push-off to toe-off.
+rocker about the heel after heel strike, then the heel rising under the knee's schedule to toe-off.
 :class:`.virtual_leg.StanceFoot` holds the numbers of one stance; :func:`rule_pitch` takes them
 as numbers or one per sample, so that the body (:mod:`klaw_ocp.body_motion.stance_legs`) evaluates
 many stances at once.
+
+The paper gives heel-off's trigger (θ5 reaching a limit) and meta-off's (θ6 reaching a limit), but
+not what the foot does in between. Our rule, after people's late stance (docs/human-gait.md): the
+knee is the leg's lever, the foot follows it.
+
+- **The knee's schedule** (:func:`knee_schedule`). From foot flat the knee may straighten to a
+  floor that rises smoothly from 0 to ``knee_floor`` (the attribute
+  ``terminal_stance_knee_flexion``, about 5°: people's knee is nearly straight in terminal stance)
+  by ``t_knee``; from ``t_knee`` (``knee_flexion_lead`` of the cycle before toe-off) it flexes as
+  people's knee does, with constant acceleration, to ``knee_toe_off`` at toe-off
+  (``toe_off_knee_flexion``; people's knee flexes as s² over the last fifth of the stance, s from 0
+  to 1). Where the θ5 limit triggered heel-off first, the knee holds ``knee_hold`` (its flexion
+  then) until the schedule overtakes it (a C1 blend).
+- **The pitch.** While the flat foot lets the knee stay above the schedule, the foot is flat. Where
+  the hip would take the flat-foot leg beyond the schedule's reach, the heel rises by the least
+  pitch that keeps the knee on the schedule (:func:`.heel_up_roots.reach_pitch`: about the first
+  metatarsal head, then about the toe tip). The heel leaves the ground with zero rate: the hip-ankle
+  distance the leg keeps blends into the schedule's over ``heel_blend`` (m) of the flat-foot
+  distance (C1, :func:`_soft_excess`), so neither the knee's nor the ankle's rate jumps at heel-off.
+  The heel does not come down again: where the rule's pitch would fall, single support keeps its
+  deficit from the running maximum at its nodes (:meth:`.virtual_leg.StanceFoot.find_heel_off`),
+  the double support at least the pitch it started from.
 
 Pitch ``p`` is the foot's heel-up rotation (clockwise, rad), negative while it rotates toe-up about
 the heel; times are the leg's stance time, 0 at its heel strike.
@@ -13,40 +35,23 @@ import numpy as np
 
 from .leg_geometry import clamp, smoothstep
 
-#: The leg reaches its ankle with the hip-ankle distance this fraction of l1 (about 10° of knee
-#: flexion at 1.8 m) at the other leg's heel strike and at toe-off: a fully straight knee is a
-#: singular point of the inverse kinematics, and near it a millimetre of reach is degrees of knee.
-#: With 5° (1 - 1e-3) the knee extending into that limit moved 2.1-2.5° a frame at 500 fps at the
-#: end of single support (3.5 km/h, 1.5 m) and at toe-off (8 km/h), and started swing1 with its
-#: thigh at 675°/s. People's knee is 5-10° at the other heel strike and 35-40° at toe-off.
+#: The least reach of the leg, as a fraction of l1 (about 10° of knee at 1.8 m): the toe-off pitch
+#: is at least the one at which the leg reaches its ankle with it (:func:`.virtual_leg.toe_off_pitch`),
+#: so that swing1 never starts from a leg beyond its reach.
 REACH_FRACTION = 1 - 4e-3
 
-#: The push-off lasts at least this long (s): where the double support is shorter (eq. 2 gives
-#: 17 ms at 167 steps/min), the heel's rise towards the toe-off pitch begins in single support, as
-#: the knee of people begins to flex before the other foot lands. Over 17 ms the knee would go
-#: from 10° to 44°, 7° a frame at 500 fps.
-MIN_PUSH_OFF = 0.06
+#: The half width (fraction of l1) of the blend by which the heel leaves the ground: the hip-ankle
+#: distance the leg keeps departs from the flat foot's with zero rate where the flat foot comes
+#: within this much of the knee schedule's reach and meets it this much beyond (about 2 x 4.3 mm at
+#: 1.8 m, 50-100 ms of the hip's travel): near the straight knee a millimetre of reach is degrees of
+#: knee, and the flat foot's knee extends fast into the schedule (2 x 1.7 mm: 170-270 deg/s jumps).
+HEEL_BLEND_REL = 5e-3
+#: The width (rad) of the C1 blend by which the knee schedule overtakes a knee held at a θ5 heel-off.
+KNEE_HOLD_BLEND = np.radians(3.0)
 
 #: The rules of :meth:`.virtual_leg.StanceFoot.pitch` that differ from stance to stance.
-RULE_FIELDS = ("t_flat", "rocker_pitch", "rocker_rate", "t_heel_off", "t_step", "t_toe_off", "t_push",
-               "pitch_ds_start", "pitch_ds_floor", "pitch_toe_off", "push_ease")
-
-
-def push_start(t_step: float, t_toe_off: float, earliest: float) -> float:
-    """When the push-off's line begins: the other leg's heel strike, or MIN_PUSH_OFF before toe-off
-    where the double support is shorter (not before ``earliest``: the foot is flat then)."""
-    return min(t_step, max(t_toe_off - MIN_PUSH_OFF, earliest))
-
-
-def single_reach_fraction(t, t_flat, t_step):
-    """The hip-ankle distance, as a fraction of l1, that single support lets the leg reach at its
-    stance times ``t``: l1 when the foot is flat (the rocker's end, continuous with it), easing to
-    REACH_FRACTION by the other leg's heel strike (a smoothstep), where the double support keeps
-    it. A leg allowed to go fully straight straightens as the square root of time (up to 3.6° of
-    knee in the last 2 ms of single support in configs/accelerate.yaml); kept REACH_FRACTION short,
-    its knee meets that limit at a finite rate."""
-    s = clamp((np.asarray(t, float) - t_flat) / np.maximum(np.asarray(t_step, float) - t_flat, 1e-12), 0.0, 1.0)
-    return 1 - (1 - REACH_FRACTION) * s * s * (3 - 2 * s)
+RULE_FIELDS = ("t_flat", "rocker_pitch", "rocker_rate", "t_step", "t_knee", "t_knee_end", "knee_floor",
+               "knee_toe_off", "knee_hold", "t_hold", "heel_blend", "pitch_ds_floor")
 
 
 def rocker_left(t, t_flat):
@@ -68,55 +73,90 @@ def rocker_pitch(t, t_flat, p0, rate):
     return np.where(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
 
 
-def _push_through(t, t_push, t_toe_off, ease):
-    """How far along the push-off's line (0 at t_push, 1 at toe-off), eased in over the fraction
-    ``ease`` of it (a cubic with zero start rate, joining the line with its slope)."""
-    through = clamp((t - t_push) / np.maximum(t_toe_off - t_push, 1e-12), 0.0, 1.0)
-    if (np.asarray(ease) > 0).any():
-        s = np.minimum(through / np.where(ease > 0, ease, 1.0), 1.0)
-        through = np.where((ease > 0) & (s < 1), ease * s * s * (2 - s), through)
-    return through
+def _soft_plus(v, width):
+    """A C1 max(v, 0): 0 for v <= -width, v for v >= width, the parabola (v + width)²/(4 width)
+    between (v itself for width 0)."""
+    width = np.asarray(width, float)
+    safe = np.where(width > 0, width, 1.0)
+    blend = np.where(v <= -width, 0.0, np.where(v >= width, v, (v + width) ** 2 / (4 * safe)))
+    return np.where(width > 0, blend, np.maximum(v, 0.0))
 
 
-def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, reach, held) -> tuple[np.ndarray, np.ndarray]:
+def _floor_ramp(t, t_flat, t_knee):
+    """0 at foot flat to 1 at t_knee (a smoothstep; 1 throughout where t_knee <= t_flat)."""
+    span = np.asarray(t_knee - t_flat, float)
+    return np.where(span > 0, smoothstep((t - t_flat) / np.where(span > 0, span, 1.0)), 1.0)
+
+
+def knee_schedule(t, t_flat, t_knee, t_knee_end, knee_floor, knee_toe_off, knee_hold=0.0, t_hold=np.inf):
+    """The knee's flexion (rad) below which the leg does not straighten at stance times ``t`` >=
+    t_flat: ``knee_floor`` reached by a smoothstep from 0 at foot flat to ``t_knee``, then
+    knee_floor + (knee_toe_off - knee_floor) s², s = (t - t_knee)/(t_knee_end - t_knee) (people's
+    knee over pre-swing), held at ``knee_toe_off`` after t_knee_end; from ``t_hold`` (a heel-off
+    by the θ5 limit) at least ``knee_hold`` (blended over KNEE_HOLD_BLEND)."""
+    t = np.asarray(t, float)
+    ramp = _floor_ramp(t, t_flat, t_knee)
+    span = np.asarray(t_knee_end - t_knee, float)
+    s = clamp((t - t_knee) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+    knee = knee_floor * ramp + (knee_toe_off - knee_floor) * s * s
+    hold = (t >= t_hold) & (knee_hold > 0)
+    if np.any(hold):
+        knee = np.where(hold, knee_hold + _soft_plus(knee - knee_hold, KNEE_HOLD_BLEND), knee)
+    return knee
+
+
+def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, deficit) -> tuple[np.ndarray, np.ndarray]:
     """:meth:`.virtual_leg.StanceFoot.pitch` with the rules (RULE_FIELDS) as numbers or one per
-    sample: ``reach(hips, fraction)`` is :meth:`.virtual_leg.StanceFoot.reach_pitch` of the foot's
-    geometry, ``held(t, rows)`` the single support's held pitch at those rows (None before the
-    heel-off search has set it). Returns the pitch and the reach fraction the leg is held to at
-    each sample (1 where no reach rule applies)."""
+    sample: ``geometry`` is the stance's :class:`.virtual_leg.StanceFoot` (its foot's flat ankle
+    and :meth:`~.virtual_leg.StanceFoot.reach_pitch`); ``deficit(t, rows)`` what single support adds
+    to the rule at those rows to keep the heel from coming down again (None before the heel-off
+    search has set it). Returns the pitch and the hip-ankle distance the leg keeps, a fraction of
+    l1 (1 where no reach rule applies)."""
     def at(name, rows):
         value = rules[name]
         return value[rows] if np.ndim(value) else value
 
-    def line(rows):       # (t_push is inf until the double support is known: the line starts at t_step)
-        through = _push_through(t[rows], np.minimum(at("t_push", rows), at("t_step", rows)), at("t_toe_off", rows),
-                                at("push_ease", rows))
-        start = at("pitch_ds_start", rows)
-        return start + (at("pitch_toe_off", rows) - start) * through, through
-    # each rule only where it applies (the walk asks mostly for one of them at a time, and each
-    # numpy operation costs about as much on no samples as on a few)
+    body = geometry.foot.body
     pitch, fraction = np.zeros(len(t)), np.ones(len(t))
     rocker = t < rules["t_flat"]
     if rocker.any():
         pitch[rocker] = rocker_pitch(t[rocker], at("t_flat", rocker), at("rocker_pitch", rocker),
                                       at("rocker_rate", rocker))
-    single = ~rocker & (t >= np.minimum(rules["t_heel_off"], rules["t_push"])) & (t < rules["t_step"])
-    if single.any():
-        fraction[single] = single_reach_fraction(t[single], at("t_flat", single), at("t_step", single))
-        pitch[single] = reach(hips[single], fraction[single])
-        kept = held(t, single)
-        if kept is not None:
-            pitch[single] = np.maximum(pitch[single], kept)
-        early = single & (t >= rules["t_push"])     # a short double support's push, begun early
-        if early.any():
-            pitch[early] = np.maximum(pitch[early], line(early)[0])
-    push = ~rocker & (t >= rules["t_step"])
-    if push.any():
-        t_step = at("t_step", push)
-        linear, through = line(push)
-        # the reach goes on from where single support left it (REACH_FRACTION; l1 for a foot that
-        # stood still) to REACH_FRACTION by toe-off, as the line goes
-        left = single_reach_fraction(t_step, at("t_flat", push), t_step)
-        fraction[push] = left + (REACH_FRACTION - left) * through
-        pitch[push] = np.maximum(np.maximum(linear, at("pitch_ds_floor", push)), reach(hips[push], fraction[push]))
+    up = ~rocker
+    if not up.any():
+        return pitch, fraction
+    tt, h = t[up], hips[up]
+    knee = knee_schedule(tt, at("t_flat", up), at("t_knee", up), at("t_knee_end", up), at("knee_floor", up),
+                         at("knee_toe_off", up), at("knee_hold", up), at("t_hold", up))
+    l3, l4 = body.l3, body.l4
+    width = at("heel_blend", up)
+    # the schedule's reach; at foot flat 2 x width beyond the straight leg, so that a leg straight
+    # there (a start from rest) does not lift its heel at once, and no more a quarter of the way to
+    # t_knee
+    t_flat_up = at("t_flat", up)
+    ramp = _floor_ramp(tt, t_flat_up, t_flat_up + 0.25 * (at("t_knee", up) - t_flat_up))
+    reach = np.sqrt(l3 * l3 + l4 * l4 + 2 * l3 * l4 * np.cos(knee)) + 2 * width * (1 - ramp)
+    ankle = geometry.foot.ankle
+    flat = np.hypot(ankle[0] - h[:, 0], ankle[1] - h[:, 1])
+    # the distance the leg keeps: the flat foot's, less its C1 excess over the schedule's reach
+    # (the heel leaves the ground where the flat foot comes within ``width`` of that reach, and the
+    # leg keeps the schedule's reach once the flat foot is ``width`` beyond it)
+    keep = flat - _soft_plus(flat - reach, width)
+    fraction[up] = keep / body.l1
+    off = keep < flat
+    p = np.zeros(len(tt))
+    if off.any():
+        p[off] = geometry.reach_pitch(h[off], fraction[up][off])
+    if deficit is not None:
+        single = tt < at("t_step", up)
+        if single.any():
+            rows = np.flatnonzero(up)[single]
+            mask = np.zeros(len(t), bool)
+            mask[rows] = True
+            p[single] = p[single] + deficit(t, mask)
+    double = tt >= at("t_step", up)
+    if double.any():
+        floor = at("pitch_ds_floor", up)
+        p[double] = np.maximum(p[double], floor[double] if np.ndim(floor) else floor)
+    pitch[up] = p
     return pitch, fraction

@@ -14,17 +14,20 @@ double support of the next step, t_ds later):
   inverse kinematics;
 - **heel-off**: when the ankle angle θ5 reaches its limit (``heel_off_theta5``, a dorsiflexion:
   θ5 is the angle from the shank's axis to the foot's, 90° neutral, more when the shank leans
-  forward over the foot) the foot rotates about the first metatarsal head (radius l12) while the
-  toe stays flat on the ground, so θ6 equals the foot's pitch. In single support the ankle stays
-  at its limit (the pitch solves θ5 = limit: the heel comes up because the ankle stops giving);
-  from the other leg's heel strike the pitch runs linearly to the toe-off pitch (the push-off;
-  from MIN_PUSH_OFF before toe-off where the double support is shorter: :mod:`.pitch_rules`);
-- **meta-off**: when θ6 reaches its limit (``meta_off_theta6``) the toe angle is held and the whole
-  foot rotates about the toe tip until toe-off.
+  forward over the flat foot), or when the hip would take the flat-foot leg straighter than the
+  knee's schedule allows, the foot rotates about the first metatarsal head (radius l12) while the
+  toe stays flat on the ground, so θ6 equals the foot's pitch. The paper does not say what fixes
+  the foot then; our rule (:mod:`.pitch_rules`) follows people's late stance: the knee keeps its
+  schedule (nearly straight, ``terminal_stance_knee_flexion``, then flexing as s² from
+  ``knee_flexion_lead`` of the cycle before toe-off to ``toe_off_knee_flexion`` at toe-off) and
+  the heel rises by the least pitch that lets it, leaving the ground with zero rate;
+- **meta-off**: as θ6 nears its limit (``meta_off_theta6``) the toe joint stops following the pitch
+  (a C1 blend over ``leg_geometry.META_OFF_BLEND`` either side of the limit, from where the period
+  starts), the toe angle is held and the whole foot rotates about the toe tip until toe-off, on the
+  same schedule.
 
-In every period the pitch is raised, where needed, to the least one at which the leg reaches its
-ankle (from l1 at foot flat to ``REACH_FRACTION`` of it, about 10° of knee, at the other heel
-strike and at toe-off), and it never falls back (the heel does not come down again). Hip and knee angles follow by two-link inverse kinematics (knee forward).
+The pitch never falls back (the heel does not come down again). Hip and knee angles follow by
+two-link inverse kinematics (knee forward).
 
 Frames: world x forward, y up, ground y = 0; arrays are over n samples; angles in radians. Pitch
 ``p`` is the foot's heel-up rotation (clockwise), negative while it rotates toe-up about the heel.
@@ -39,13 +42,10 @@ import numpy as np
 from ..body import Body
 from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
-from .leg_geometry import FlatFoot, ankle_angle, leg_ik, reach_for_knee_flexion
-from .pitch_rules import MIN_PUSH_OFF, REACH_FRACTION, RULE_FIELDS, push_start, rocker_left, rule_pitch, single_reach_fraction
-
-#: the least time (s) over which the heel's rise from the ground is a straight line in the pitch
-HEEL_OFF_CHORD = 0.02
+from .leg_geometry import FlatFoot, ankle_angle, knee_flexion_for_reach, leg_ik, meta_off_band, reach_for_knee_flexion
+from .pitch_rules import HEEL_BLEND_REL, REACH_FRACTION, RULE_FIELDS, knee_schedule, rocker_left, rule_pitch
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
-_PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch > meta-off)
+_PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch in or past the meta-off band)
 
 
 @dataclass(frozen=True)
@@ -83,29 +83,38 @@ class StanceFoot:
     t_step: float                  # the other leg's heel strike: the double support begins
     t_heel_off: float = math.inf
     t_toe_off: float = math.inf
-    #: the push-off's line starts at t_push (the other leg's heel strike, earlier where the double
-    #: support is short: :func:`.pitch_rules.push_start`) from pitch_ds_start; the double support
-    #: keeps at least pitch_ds_floor, where single support left the pitch at the other heel strike
-    t_push: float = math.inf
-    pitch_ds_start: float = 0.0
+    #: the knee's schedule (:func:`.pitch_rules.knee_schedule`, rad and stance times): its floor in
+    #: terminal stance, reached by t_knee, then its flexion to knee_toe_off at t_knee_end (the
+    #: toe-off, as expected at heel strike; the double support confirms it)
+    t_knee: float = math.inf
+    t_knee_end: float = math.inf
+    #: t_knee_end - t_knee (s): the double support keeps it when it confirms the toe-off (inf: keep
+    #: t_knee itself)
+    knee_lead: float = math.inf
+    knee_floor: float = 0.0
+    knee_toe_off: float = 0.0
+    #: a heel-off by the θ5 limit holds the knee at least at its flexion then, from t_hold
+    knee_hold: float = 0.0
+    t_hold: float = math.inf
+    #: the half width (m) of the heel's C1 departure from the ground (0: a foot that stood still,
+    #: whose schedule starts from rest itself)
+    heel_blend: float = 0.0
+    #: the double support keeps at least the pitch single support left at the other heel strike
     pitch_ds_floor: float = 0.0
+    #: the pitch at toe-off (where swing1 starts)
     pitch_toe_off: float = 0.0
     #: the pitch rate at heel strike (rad/s, >= 0): see :meth:`at_heel_strike`
     rocker_rate: float = 0.0
-    #: the fraction of the double support over which the push-off eases in from rest (0: at once);
-    #: see :func:`hind_foot_at_rest`
-    push_ease: float = 0.0
-    #: the single-support pitch at the stance's nodes, never falling (set by :meth:`find_heel_off`):
-    #: θ5 rises as the shank leans over the flat foot and falls again as the knee straightens, and
-    #: the heel does not come down again once it is off
+    #: single support's nodes and what they add to the rule's pitch so that it never falls (set by
+    #: :meth:`find_heel_off`): the running maximum of the rule's pitch less the rule's pitch
     single_t: tuple = ()
-    single_pitch: tuple = ()
+    single_deficit: tuple = ()
     #: the knee flexion at heel strike (rad; 0: the leg lands straight): see :mod:`.landing`
     landing_knee: float = 0.0
 
     @classmethod
     def at_heel_strike(cls, body: Body, attrs, ankle_x: float, hip: np.ndarray, t_step: float,
-                       hip_velocity=(0.0, 0.0)) -> "StanceFoot":
+                       hip_velocity=(0.0, 0.0), t_ds_next: float | None = None) -> "StanceFoot":
         """The foot lands on its heel at (ankle_x - l8, 0) with the knee flexed by the least angle
         :mod:`.landing` allows (straight where the leg manages): its ankle is the leg's reach
         from the hip and the heel-ankle distance from the heel, which fixes the heel-strike pitch.
@@ -114,8 +123,13 @@ class StanceFoot:
         (``hip_velocity``, m/s) approaches it, so that the hip-ankle distance starts still: any
         shortening rate would bend the straight knee as the square root of time, an infinite knee
         rate (23° in the first frame at 30 fps). With the knee flexed it starts at most
-        LANDING_FOOT_RATE, and the knee takes the rest of the approach."""
+        LANDING_FOOT_RATE, and the knee takes the rest of the approach.
+
+        ``t_ds_next``: the next step's double support (toe-off comes that long after the other leg's
+        heel strike; the knee's schedule is fixed now, so that single support and the double support
+        follow one curve); this step's own where not given."""
         t_flat = attrs.foot_flat_fraction * 2 * t_step
+        schedule = knee_rules(body, attrs, t_flat, t_step, t_step if t_ds_next is None else t_ds_next)
         # each knee's landing pitch and still-length rate once (the search asks for a knee's foot
         # with several rates)
         poses = {0.0: landing_pitch(body, ankle_x, hip, body.l1, hip_velocity)}
@@ -129,14 +143,15 @@ class StanceFoot:
             rate = still if rate is None else rate
             return cls(FlatFoot(body, ankle_x), pitch, math.radians(attrs.theta6_impact), t_flat,
                        math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
-                       rocker_rate=rate, landing_knee=knee)
+                       rocker_rate=rate, landing_knee=knee, **schedule)
         return least_landing_knee(landing, hip, hip_velocity, usable=straight_pitch < 0 and t_flat > 0)
 
     @classmethod
-    def standing(cls, body: Body, attrs, ankle_x: float, t_step: float) -> "StanceFoot":
+    def standing(cls, body: Body, attrs, ankle_x: float, t_step: float, t_ds_next: float | None = None) -> "StanceFoot":
         """The stance foot of a walk's first step from rest: flat on the ground from the start."""
+        schedule = knee_rules(body, attrs, 0.0, t_step, 0.5 * t_step if t_ds_next is None else t_ds_next)
         return cls(FlatFoot(body, ankle_x), 0.0, 0.0, 0.0, math.radians(attrs.heel_off_theta5),
-                   math.radians(attrs.meta_off_theta6), t_step)
+                   math.radians(attrs.meta_off_theta6), t_step, **schedule)
 
     # -- the pitch rules ----------------------------------------------------------------------
     def _ankle(self, pitch) -> np.ndarray:
@@ -144,29 +159,12 @@ class StanceFoot:
 
     def reach_pitch(self, hips: np.ndarray, fraction=1.0) -> np.ndarray:
         """The least pitch >= 0 at which the leg reaches its ankle with the hip-ankle distance
-        ``fraction`` of l1 (a scalar or one per sample): l1 where the foot comes flat, easing to
-        REACH_FRACTION by the other leg's heel strike (:func:`single_reach_fraction`), where the
-        double support keeps it to toe-off and swing1 takes over its rates. In closed form
+        ``fraction`` of l1 (a scalar or one per sample; the knee's schedule gives it,
+        :mod:`.pitch_rules`). In closed form except about meta-off
         (:func:`.heel_up_roots.reach_pitch`): the distance to the hip falls as the heel rises."""
         hips = np.asarray(hips, float)
-        return heel_up_roots.reach_pitch(self.foot, self.meta_off_theta6, self.heel_off_theta5, hips,
+        return heel_up_roots.reach_pitch(self.foot, self.meta_off_theta6, hips,
                                          self.foot.body.l1 * np.asarray(fraction, float))
-
-    def ankle_limit_pitch(self, hips: np.ndarray, flat_excess=None) -> np.ndarray:
-        """The least pitch >= 0 that holds θ5 at ``heel_off_theta5`` (0 while the flat foot is
-        below it; ``flat_excess``: the flat foot's θ5 less the limit, when the caller has it). θ5
-        need not fall monotonically as the heel rises; this is its first crossing, in closed form
-        (:func:`.heel_up_roots.ankle_limit_pitch`)."""
-        hips = np.asarray(hips, float)
-        if flat_excess is None:
-            flat_excess = self._flat_triggers(hips)[0]
-        pitch = np.zeros(len(hips))
-        need = flat_excess > 0
-        if need.any():
-            body = self.foot.body
-            pitch[need] = heel_up_roots.ankle_limit_pitch(self.foot, self.meta_off_theta6, self.heel_off_theta5,
-                                                          hips[need], body.l3, body.l1)
-        return pitch
 
     def pitch(self, t: np.ndarray, hips: np.ndarray) -> np.ndarray:
         """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
@@ -174,9 +172,14 @@ class StanceFoot:
 
     def _rule_pitch(self, t, hips):
         """:func:`.pitch_rules.rule_pitch` of this stance: the pitch and the reach fraction."""
-        def held(t, rows):
-            return np.interp(t[rows], self.single_t, self.single_pitch) if self.single_t else None
-        return rule_pitch({name: getattr(self, name) for name in RULE_FIELDS}, t, hips, self.reach_pitch, held)
+        def deficit(t, rows):
+            return np.interp(t[rows], self.single_t, self.single_deficit, right=0.0) if self.single_t else 0.0
+        return rule_pitch({name: getattr(self, name) for name in RULE_FIELDS}, t, hips, self, deficit)
+
+    def knee_schedule(self, t) -> np.ndarray:
+        """The knee's schedule at stance times ``t`` (rad; :func:`.pitch_rules.knee_schedule`)."""
+        return knee_schedule(np.asarray(t, float), self.t_flat, self.t_knee, self.t_knee_end, self.knee_floor,
+                             self.knee_toe_off, self.knee_hold, self.t_hold)
 
     def frames(self, t: np.ndarray, hips: np.ndarray) -> VirtualLegFrames:
         """The leg at stance times ``t`` (n,) with the simulated hips ``hips`` (n, 2)."""
@@ -184,51 +187,42 @@ class StanceFoot:
         return leg_frames(self, t, hips, *self._rule_pitch(t, hips), self.rocker_theta6, self.t_flat)
 
     # -- completing the rules -----------------------------------------------------------------
-    def _flat_triggers(self, hips: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """With the foot flat: θ5 minus its limit (rad) and the hip-ankle distance minus the reach
-        (m, against the straight leg); the heel comes off where the first of them reaches zero."""
-        body, ankle = self.foot.body, self.foot.ankle
-        th3, th4, _ = leg_ik(body, hips, ankle)
-        theta5 = ankle_angle(th3, th4, 0.0)
-        return theta5 - self.heel_off_theta5, np.hypot(ankle[0] - hips[:, 0], ankle[1] - hips[:, 1]) - body.l1
+    def _flat_theta5(self, hips: np.ndarray) -> np.ndarray:
+        """θ5 (rad) of the flat foot's leg at the hips (n, 2)."""
+        th3, th4, _ = leg_ik(self.foot.body, hips, self.foot.ankle)
+        return ankle_angle(th3, th4, 0.0)
 
     def find_heel_off(self, t: np.ndarray, hips: np.ndarray) -> "StanceFoot":
-        """The heel-off time from the single-support samples ``t`` (the stance's nodes): the first
-        zero after the foot is flat of either trigger (linear between the samples around it), or the
-        other leg's heel strike if the heel stays down that long."""
+        """Heel-off from the single-support samples ``t`` (the stance's nodes), the first after the
+        foot is flat of: θ5 reaching its limit (the paper's trigger: from then the knee holds at
+        least its flexion there, ``knee_hold``), or the rule's pitch leaving 0 (the hip would take
+        the flat-foot leg straighter than the knee's schedule); linear between the samples around
+        it, or the other leg's heel strike if the heel stays down that long. Also what single
+        support adds to the rule's pitch so that the heel never comes down again."""
         t, hips = np.asarray(t, float), np.asarray(hips, float)
-        first = self.t_step
-        limit, distance = self._flat_triggers(hips)
-        fraction = single_reach_fraction(t, self.t_flat, self.t_step)
-        triggers = (limit, distance + self.foot.body.l1 * (1 - fraction))
-        for g in triggers:
-            up = np.flatnonzero((g > 0) & (t >= self.t_flat))
-            if not up.size:
-                continue
+        foot = self
+        after_flat = t >= self.t_flat
+        excess = self._flat_theta5(hips) - self.heel_off_theta5
+        up = np.flatnonzero((excess > 0) & after_flat)
+        if up.size and self.heel_blend > 0:
             k = up[0]
-            if k == 0 or t[k - 1] < self.t_flat or g[k - 1] > 0:
-                crossing = max(t[k - 1] if k else t[k], self.t_flat)
-            else:
-                crossing = t[k - 1] + (t[k] - t[k - 1]) * (-g[k - 1]) / (g[k] - g[k - 1])
-            first = min(first, float(crossing))
-        after = t >= first
-        rule = np.zeros(len(t))
-        if after.any():     # the searches only where the heel is off
-            rule[after] = np.maximum(self.ankle_limit_pitch(hips[after], triggers[0][after]),
-                                     self.reach_pitch(hips[after], fraction[after]))
-        held = np.maximum.accumulate(rule)
-        # the heel leaves the ground at ``first``: the held pitch rises from 0 there, not along the
-        # line between the nodes around it (which would lift the heel by a jump). It rises along a
-        # chord of at least HEEL_OFF_CHORD: the ankle-limit pitch grows as the square root of the
-        # time since heel-off where θ5 is stationary in the pitch (the knee then snaps, 2.2° in
-        # 2 ms at 7 km/h); under the chord the ankle passes its limit by a fraction of a degree
-        # for those milliseconds, and the reach still holds the leg (:func:`rule_pitch`).
-        chord = after & (t < first + HEEL_OFF_CHORD)
-        chord[np.flatnonzero(after)[-1:]] = False     # the last node stays, whatever its distance
-        kept = after & ~chord
-        single_t = np.r_[t[~after], first, t[kept]]
-        return replace(self, t_heel_off=first, single_t=tuple(single_t),
-                       single_pitch=tuple(np.r_[held[~after], 0.0, held[kept]]))
+            flat = np.hypot(*(self.foot.ankle - hips[k]))
+            schedule = float(self.knee_schedule(t[k]))
+            # held where the flat foot's knee is at θ5's limit, unless the schedule asks for more
+            hold = float(knee_flexion_for_reach(self.foot.body, flat + self.heel_blend))
+            if hold > schedule:
+                foot = replace(self, knee_hold=hold, t_hold=float(t[k]))
+        pitch = foot.pitch(t, hips)
+        off = np.flatnonzero((pitch > 0) & after_flat)
+        first = self.t_step
+        if off.size:
+            k = off[0]
+            first = float(t[k - 1]) if k > 0 and t[k - 1] >= self.t_flat else float(max(t[k], self.t_flat))
+        # the heel does not come down again: what the running maximum adds at each node
+        single = after_flat & (t < self.t_step)
+        deficit = np.zeros(len(t))
+        deficit[single] = np.maximum.accumulate(pitch[single]) - pitch[single] if single.any() else 0.0
+        return replace(foot, t_heel_off=first, single_t=tuple(t[single]), single_deficit=tuple(deficit[single]))
 
     @property
     def starts_standing(self) -> bool:
@@ -241,38 +235,31 @@ class StanceFoot:
         return math.isfinite(self.t_toe_off)
 
     def pitch_at_other_heel_strike(self, hip: np.ndarray) -> float:
-        """Where single support leaves the foot's pitch when the other leg strikes (>= 0), and at
-        least the reach there (a hind foot with no single support: the push starts from its
-        reach, not below it, where the line would overtake the reach with a kink in the knee)."""
+        """Where single support leaves the foot's pitch when the other leg strikes (>= 0)."""
         before, hips = np.array([self.t_step - 1e-12]), np.atleast_2d(hip)
-        pitch = max(float(self.pitch(before, hips)[0]), 0.0)
-        if self.t_flat < self.t_heel_off < before[0]:
-            return pitch          # single support's rule, which holds the leg to that reach already
-        fraction = single_reach_fraction(self.t_step, self.t_flat, self.t_step)
-        return max(pitch, float(self.reach_pitch(hips, fraction)[0]))
+        return max(float(self.pitch(before, hips)[0]), 0.0)
 
     def with_double_support(self, hip_at_other_heel_strike: np.ndarray, t_ds: float, pitch_toe_off: float,
-                            start: float | None = None) -> "StanceFoot":
-        """The rules of the double support: the pitch runs from where single support left it
-        (``start``, when the caller has :meth:`pitch_at_other_heel_strike` already) to
-        ``pitch_toe_off`` at toe-off, t_ds after the other leg's heel strike; where the double
-        support is shorter than MIN_PUSH_OFF, the line begins that long before toe-off, from the
-        single support's held pitch there."""
+                            start: float | None = None, hip_toe_off: np.ndarray | None = None) -> "StanceFoot":
+        """The rules of the double support: the knee's schedule goes on to toe-off, t_ds after the
+        other leg's heel strike, where the foot reaches ``pitch_toe_off`` (:func:`toe_off_pitch`);
+        the pitch never falls below where single support left it (``start``, when the caller has
+        :meth:`pitch_at_other_heel_strike` already). Where the toe-off pitch is not the schedule's
+        (a first step from rest lowers it), the schedule ends at the knee that pitch gives at
+        ``hip_toe_off``."""
         if start is None:
             start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         t_toe_off = self.t_step + t_ds
-        t_push = push_start(self.t_step, t_toe_off, self.t_flat)
-        # a push-off begun in single support eases out of its held pitch (EARLY_PUSH_EASE); the
-        # walking start's, begun before the walk, is at its full rate when the walk begins
-        early = t_push < self.t_step and bool(self.single_t)
-        line_start = float(np.interp(t_push, self.single_t, self.single_pitch)) if early else start
-        # a leg that single support left straight eases into its push-off (PUSH_EASE); a bent one
-        # does not: its heel rising at once keeps the leg from straightening as the hip moves away
-        reach = np.hypot(*(self._ankle(np.array([start]))[0] - np.asarray(hip_at_other_heel_strike, float).ravel()))
-        straight = reach >= self.foot.body.l1 * (REACH_FRACTION - 1e-9)
-        return replace(self, t_toe_off=t_toe_off, t_push=t_push, pitch_ds_start=min(line_start, start),
-                       pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start),
-                       push_ease=max(self.push_ease, PUSH_EASE if straight else 0.0, EARLY_PUSH_EASE if early else 0.0))
+        t_knee = t_toe_off - self.knee_lead if math.isfinite(self.knee_lead) else self.t_knee
+        foot = replace(self, t_toe_off=t_toe_off, t_knee_end=t_toe_off, t_knee=min(t_knee, t_toe_off),
+                       pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start))
+        if hip_toe_off is not None:
+            hip = np.atleast_2d(np.asarray(hip_toe_off, float))
+            if abs(float(foot.pitch(np.array([t_toe_off]), hip)[0]) - foot.pitch_toe_off) > 1e-12:
+                ankle = self._ankle(np.array([foot.pitch_toe_off]))
+                knee = float(knee_flexion_for_reach(self.foot.body, np.hypot(*(ankle[0] - hip[0]))))
+                foot = replace(foot, knee_toe_off=knee)
+        return foot
 
 
 def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_theta6, t_flat) -> VirtualLegFrames:
@@ -285,7 +272,8 @@ def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_thet
     body = geometry.foot.body
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
-    period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q)]
+    # meta-off from where the toe joint stops following the pitch (the band about q, leg_geometry)
+    period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q - meta_off_band(q))]
     # where the foot can rise no further, the leg keeps the reach the rules held it to, so its
     # knee does not snap straight as the hip moves out of reach
     limit = body.l1 * np.where(pitch >= heel_up_roots.MAX_PITCH, reach_fraction, 1.0)
@@ -330,25 +318,27 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     return hi
 
 
-#: A foot whose leg is at its reach when the double support begins (single support leaves it
-#: REACH_FRACTION short of full stretch; a start from rest) eases into its push-off over this
-#: fraction of the double support: a heel rising at once would bend the knee as the square root of
-#: time (3.6° in the first 2 ms from rest, 15° in steps of 0.5 m at 167 steps/min). A bent leg does
-#: not ease: a slow heel there lets the hip moving away straighten it, again as a square root
-#: (3.2° in 2 ms at 4 km/h). It is below 1 - TOE_OFF_RATE_WINDOW (control/step_stages.py) so that the
-#: toe-off posture and rate that start swing1 follow from the push's line.
-PUSH_EASE = 0.5
-PUSH_EASE_FROM_REST = PUSH_EASE
-EARLY_PUSH_EASE = 1.0
+def knee_rules(body: Body, attrs, t_flat: float, t_step: float, t_ds_next: float) -> dict:
+    """The knee's schedule of a stance (:func:`.pitch_rules.knee_schedule`) from the attributes:
+    toe-off expected ``t_ds_next`` after the other leg's heel strike, the knee's flexion for it
+    starting ``knee_flexion_lead`` of the cycle (2 t_step) before."""
+    t_end = t_step + t_ds_next
+    lead = attrs.knee_flexion_lead * 2 * t_step
+    return {"t_knee": max(t_end - lead, t_flat), "t_knee_end": t_end, "knee_lead": lead,
+            "knee_floor": attrs.rad("terminal_stance_knee_flexion"),
+            "knee_toe_off": attrs.rad("toe_off_knee_flexion"), "heel_blend": HEEL_BLEND_REL * body.l1}
 
 
-def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True) -> StanceFoot:
-    """The hind foot of a walk's first step, with no stance behind it: flat until the double
-    support, which then pitches it from its reach to toe-off, easing in from rest
-    (PUSH_EASE_FROM_REST). In a walking start (``from_rest`` False) the walk begins mid-stride:
-    the leg is at its reach (REACH_FRACTION, not straight), and where the double support is
-    shorter than MIN_PUSH_OFF the push-off began before the walk, so the heel is up at its start."""
-    foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0), t_heel_off=0.0, push_ease=PUSH_EASE_FROM_REST)
-    # mid-stride, its foot was flat and its leg at its reach before the walk began, and its push-off
-    # is under way: no easing in
-    return foot if from_rest else replace(foot, t_flat=-MIN_PUSH_OFF, push_ease=0.0)
+def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True, t_cycle: float = 1.0,
+                      t_ds: float = 0.1) -> StanceFoot:
+    """The hind foot of a walk's first step, with no stance behind it; the first step's double
+    support lasts ``t_ds`` (s). From rest it stands flat with its leg straight until the double
+    support, whose knee schedule then flexes it from straight (no floor, no blend: s² starts at
+    rest) to its toe-off flexion. In a walking start (``from_rest`` False) the walk begins
+    mid-stride: the leg has had its single support, its knee on the schedule of a walk of cycle
+    ``t_cycle`` (s), its heel up where that needs it."""
+    foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0, t_ds), t_heel_off=0.0)
+    if from_rest:
+        return replace(foot, t_knee=0.0, knee_lead=math.inf, knee_floor=0.0, heel_blend=0.0)
+    lead = attrs.knee_flexion_lead * t_cycle
+    return replace(foot, t_flat=-t_cycle, t_knee=t_ds - lead, knee_lead=lead, heel_blend=HEEL_BLEND_REL * body.l1)
