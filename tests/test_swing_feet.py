@@ -74,3 +74,28 @@ def _per_step_clearance(body, step, hips):
     swing2 = (t >= subs[1].t[0]) & (t <= subs[1].t[-1])
     return {"toe_min_m": float(toe[inside].min()), "heel_min_m": float(heel[inside].min()),
             "midswing_toe_min_m": float(toe[swing2].min()), "ankle_lift_max_m": float(lift.max())}
+
+
+def test_the_swing_ankle_leaves_toe_off_at_the_stance_rate_and_is_neutral_from_mid_swing():
+    """The schedule (kinematics/swing_foot.py, issue #34): θ5 starts at its toe-off value with the
+    stance ankle's rate (the push-off's plantarflexion runs on), reaches θ5_t1 at t1 at rest, holds
+    it through the first half of swing2, is back at the heel-strike angle by t2 at rest and holds
+    it through swing3; numpy and CasADi give the same numbers."""
+    import casadi as ca
+
+    from klaw_ocp.kinematics.swing_foot import SCHEDULE_FIELDS, SWING2_HOLD_FRACTION, SwingFoot, schedule_angles
+    foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0)
+    h = 1e-7
+    th5 = lambda t: float(foot.angles(np.array([t]))[0][0])
+    rate = lambda t: (th5(t + h) - th5(t - h)) / (2 * h)
+    assert th5(0.1) == pytest.approx(1.40) and (th5(0.1 + h) - th5(0.1)) / h == pytest.approx(-5.0, rel=1e-4)
+    assert min(th5(t) for t in np.linspace(0.1, 0.3, 201)) < 1.40 - 0.05       # plantarflexes on
+    assert th5(0.3) == pytest.approx(1.80) and rate(0.3) == pytest.approx(0.0, abs=1e-5)
+    hold = 0.3 + SWING2_HOLD_FRACTION * 0.15
+    assert th5(hold) == pytest.approx(1.80) and th5(0.45) == pytest.approx(1.5708)
+    assert rate(0.45) == pytest.approx(0.0, abs=1e-5) and th5(0.5) == pytest.approx(1.5708)
+    t = ca.SX.sym("t")
+    values = {name: getattr(foot, name) for name in SCHEDULE_FIELDS}
+    f = ca.Function("f", [t], [schedule_angles(t, values, lambda x, lo, hi: ca.fmin(ca.fmax(x, lo), hi))[0]])
+    for tt in np.linspace(0.1, 0.55, 19):
+        assert float(f(tt)) == pytest.approx(th5(tt), abs=1e-14)

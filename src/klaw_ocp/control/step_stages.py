@@ -36,12 +36,21 @@ from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
 MIN_CURVE_P_TRAVEL = 0.4
 #: The thigh rate that starts swing1 is the hind leg's mean rate over this fraction of t_ds before toe-off.
 TOE_OFF_RATE_WINDOW = 0.1
+#: The stance ankle's rate at toe-off, which the swing foot's schedule starts with, is its
+#: difference over this much (s) before toe-off (the knee's schedule makes it smooth there).
+ANKLE_RATE_STEP = 1e-4
 #: At t1 the toe is held this fraction of l1 above ``toe_clearance`` (swing1's end posture), so
 #: that swing2, whose path constraint is the clearance itself, does not start on its bound.
 TOE_MARGIN_AT_T1_REL = 0.01
 #: Curve P's peak a_max is at least this fraction of l1 above the higher of its two ends, so the
-#: quartic has a peak between them at every speed (a_max falls with speed).
+#: quartic has a peak between them at every speed (a_max falls with speed)...
 CURVE_P_PEAK_MARGIN_REL = 0.01
+#: ... and at least this fraction of its travel D: the ankle rises clear of the toe-off height
+#: early in swing1, so that the swing foot can go on plantarflexing after toe-off as people's does
+#: (issue #34: 3.5 cm at 5 km/h; with the 0.01 l1 alone the toe stayed within millimetres of the
+#: ground and the ground guard held the ankle at its toe-off angle). Proportional to D, so a
+#: closing step's short swing keeps the small peak it converges with.
+CURVE_P_PEAK_MARGIN_TRAVEL = 0.07
 #: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
 #: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
 CURVE_P_BAUMGARTE = 50.0
@@ -56,13 +65,14 @@ class DoubleSupport:
     theta4: np.ndarray
     pitch: np.ndarray
     #: the leg at toe-off: thigh, knee, the thigh's rate (the mean over TOE_OFF_RATE_WINDOW),
-    #: the ankle (world, m) and the foot's ankle and toe angles θ5, θ6
+    #: the ankle (world, m) and the foot's ankle and toe angles θ5, θ6 and the ankle's rate
     theta3_toe_off: float
     theta4_toe_off: float
     theta3d_toe_off: float
     ankle_toe_off: np.ndarray
     theta5_toe_off: float
     theta6_toe_off: float
+    theta5d_toe_off: float
     #: the hind leg's virtual leg with its double support, and its samples (leg stance time, world hips)
     hind_foot: StanceFoot
     samples: tuple
@@ -138,16 +148,19 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
     # full stretch, where its inverse kinematics is singular), and an infinitesimal difference
     # there handed swing1 thigh rates of up to 19 rad/s at 7 km/h
     window = TOE_OFF_RATE_WINDOW * t_to
-    # the double support's nodes, then toe-off and the window's start, in one pass
+    # the double support's nodes, then toe-off, the window's start and a moment before toe-off
+    # (the ankle's rate there, which the swing foot starts with), in one pass
     m = len(ds_nodes)
-    legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window)],
-                       np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to]))
+    legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window), t0 + (t_to - ANKLE_RATE_STEP)],
+                       np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to,
+                                  hip_to - ANKLE_RATE_STEP * hip_vel_to]))
     return DoubleSupport(t=stance.t[ds_nodes], theta3=np.array(legs.theta3[:m]), theta4=np.array(legs.theta4[:m]),
                          pitch=np.array(legs.pitch[:m]), theta3_toe_off=float(legs.theta3[m]),
                          theta4_toe_off=float(legs.theta4[m]),
                          theta3d_toe_off=float(legs.theta3[m] - legs.theta3[m + 1]) / window,
                          ankle_toe_off=legs.ankle[m], theta5_toe_off=float(legs.theta5[m]),
-                         theta6_toe_off=float(legs.theta6[m]), hind_foot=hind,
+                         theta6_toe_off=float(legs.theta6[m]),
+                         theta5d_toe_off=float(legs.theta5[m] - legs.theta5[m + 2]) / ANKLE_RATE_STEP, hind_foot=hind,
                          samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]))
 
 
@@ -165,11 +178,11 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray)
     a_min = ankle_t1[1]
     d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
     a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
-                max(a0, a_min) + CURVE_P_PEAK_MARGIN_REL * b.l1)
+                max(a0, a_min) + max(CURVE_P_PEAK_MARGIN_REL * b.l1, CURVE_P_PEAK_MARGIN_TRAVEL * d_travel))
     peak = a.swing_peak_position * d_travel
     coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel)
     swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
-                           theta5_hs, theta6_hs)
+                           theta5_hs, theta6_hs, ds.theta5d_toe_off)
     return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs,
                   theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
                   swing_foot=swing_foot)

@@ -7,17 +7,20 @@ arrays (the body's angles, the summary, tests) and CasADi symbols (the swing2 an
 :mod:`klaw_ocp.control.swing_law`), so the foot the solvers constrain is the foot the body shows.
 
 The interpolation, our choice (the text says only "interpolated"), shaped after the ankle of
-people, who dorsiflex quickly after toe-off, hold the foot up while it passes under the body and
-are back at neutral before the heel lands:
+people, who go on plantarflexing for a moment after toe-off, dorsiflex while the foot passes under
+the body and are back at about neutral from mid-swing to heel strike (docs/human-gait.md):
 
-- θ5 (ankle): from its toe-off value to ``theta5_t1`` over the first half of swing1 (a
-  smoothstep: it leaves the push-off's nearly still ankle without a jump in rate; an ease-out,
-  fastest at toe-off, turned the steep foot of long steps by 2.3° in the first 2 ms), held to t1; ``theta5_t1`` is the heel-strike
-  attribute, dorsiflexed further where the toe under the knee at t1 needs it
-  (:func:`klaw_ocp.control.curve_p.swing1_end_posture`), through swing2 (the toe stays up
-  while the knee extends: the paper's recovery loop keeps it ``toe_clearance`` up); then to the
-  heel-strike attribute over swing3 (a smoothstep: zero rate at both ends), so the foot lands at
-  eq. 3's angle with no rotation left;
+- θ5 (ankle): over swing1 a cubic Hermite curve from its toe-off value, leaving at the stance
+  ankle's own rate there (``theta5_rate_toe_off``: no jump in rate at toe-off, and the push-off's
+  plantarflexion runs on for a few hundredths of a second), to ``theta5_t1`` at t1 with zero rate;
+  ``theta5_t1`` is the heel-strike attribute, dorsiflexed further where the toe under the knee at
+  t1 needs it (:func:`klaw_ocp.control.curve_p.swing1_end_posture`). Held through the first half of
+  swing2 (SWING2_HOLD_FRACTION), where the toe is lowest, then, while the extending knee lifts the
+  toe, back to the heel-strike attribute by t2 (a smoothstep: zero rate at both ends; swing2's
+  toe-clearance path constrains this foot: the paper's recovery loop keeps its toe
+  ``toe_clearance`` up), held through swing3, so the foot lands at eq. 3's angle with no rotation
+  left. Held dorsiflexed through swing2 instead, its heel came down to the ground as the knee
+  straightened and the ground guard turned it (a 6° wiggle near 90 % of the cycle);
 - θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
 
 Swing2's toe-clearance path constrains the scheduled foot (the paper's recovery loop). Where the
@@ -38,22 +41,28 @@ from .leg_geometry import clamp
 
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
-                   "theta5_t1", "theta5_heel_strike", "theta6_heel_strike")
-#: the fraction of swing1 over which the ankle dorsiflexes from its toe-off angle
-ANKLE_LIFT_FRACTION = 0.5
+                   "theta5_t1", "theta5_heel_strike", "theta6_heel_strike", "theta5_rate_toe_off")
+#: the fraction of swing2 through which the ankle holds its t1 angle before it relaxes to the
+#: heel-strike attribute: the toe is lowest about t1 and rises as the knee extends. Relaxing from t1
+#: on lowered the toe onto its clearance bound in first steps from rest, whose swing2 then swung
+#: the thigh 30° forward to lift it (the paper's recovery) and back again in swing3.
+SWING2_HOLD_FRACTION = 0.5
 
 
 def schedule_angles(t, s: dict, clip):
     """θ5, θ6 at ``t`` for the schedule values ``s`` (SCHEDULE_FIELDS -> numbers or symbols);
     ``clip(x, lo, hi)`` is numpy's or CasADi's (see the module docstring for the shape)."""
-    lift = clip((t - s["t_toe_off"]) / (ANKLE_LIFT_FRACTION * (s["t1"] - s["t_toe_off"])), 0.0, 1.0)
-    swing1 = clip((t - s["t_toe_off"]) / (s["t1"] - s["t_toe_off"]), 0.0, 1.0)
-    swing3 = clip((t - s["t2"]) / (s["t_heel_strike"] - s["t2"]), 0.0, 1.0)
-    smooth_lift = lift * lift * (3 - 2 * lift)
-    smooth3 = swing3 * swing3 * (3 - 2 * swing3)
+    span1 = s["t1"] - s["t_toe_off"]
+    swing1 = clip((t - s["t_toe_off"]) / span1, 0.0, 1.0)
+    relax = s["t1"] + SWING2_HOLD_FRACTION * (s["t2"] - s["t1"])
+    swing2 = clip((t - relax) / (s["t2"] - relax), 0.0, 1.0)
     smooth1 = swing1 * swing1 * (3 - 2 * swing1)
-    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * smooth_lift
-              + (s["theta5_heel_strike"] - s["theta5_t1"]) * smooth3)
+    smooth2 = swing2 * swing2 * (3 - 2 * swing2)
+    # the cubic Hermite curve over swing1: from the toe-off angle at its rate to theta5_t1 at rest
+    rising = swing1 * (1 - swing1) * (1 - swing1)          # h10, the start rate's basis
+    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * smooth1
+              + s["theta5_rate_toe_off"] * span1 * rising
+              + (s["theta5_heel_strike"] - s["theta5_t1"]) * smooth2)
     theta6 = s["theta6_toe_off"] + (s["theta6_heel_strike"] - s["theta6_toe_off"]) * smooth1
     return theta5, theta6
 
@@ -70,6 +79,8 @@ class SwingFoot:
     theta5_t1: float
     theta5_heel_strike: float
     theta6_heel_strike: float
+    #: the stance ankle's rate at toe-off (rad/s), which the swing ankle starts with
+    theta5_rate_toe_off: float = 0.0
 
     def angles(self, t) -> tuple[np.ndarray, np.ndarray]:
         """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
