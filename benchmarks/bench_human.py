@@ -77,6 +77,8 @@ FIGURES = (
     Figure("toe_off", "toe-off", "%", 60, 62, "60 to 62", True),
     Figure("jump_main", "leg rate jump at heel strikes/toe-offs", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("jump_other", "leg rate jump, other boundaries", "deg/s", 0, 100, "<= 100", digits=0),
+    Figure("jump_foot", "  own leg at foot flat, heel-off, toe-off", "deg/s", 0, 100, "<= 100", digits=0),
+    Figure("jump_hind", "  hind leg at the other leg's heel strike", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("stance_jump", "stance leg rate jump (100 fps)", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("hip_torque", "peak swing hip torque per kg", "N m/kg", 0, 1.0, "<= 1.0", digits=2),
     Figure("gvs_thigh", "GVS thigh (RMS vs normative)", "deg", 0, 8, "<= 8 (people ~5)", True),
@@ -211,6 +213,22 @@ def measure(walk, fps: float) -> dict:
                 best = (float(j[m]), leg_names[m], f"{what} at t = {tb:.3f} s")
         worst[key] = best
         for _, t0, t1 in cycles:        # each cycle's largest, over the boundaries in [t0, t1)
+            inside = [j for tb, j in per_boundary if t0 - 1e-9 <= tb < t1 - 1e-9]
+            if inside:
+                vals[key].append(max(inside))
+    # the leg's own foot-period boundaries, and the hind leg at the other leg's heel strike, each on
+    # the angles of the leg concerned only (issue #34's goal: continuous rates there)
+    own_leg = {side: [COL[f"{PREFIX[side]}_{j}"] for j in LEG_JOINTS] for side in ("right", "left")}
+    kinds = {"jump_foot": [(e["time"], e["side"]) for e in events if e["event"] in ("foot_flat", "heel_off", "toe_off")],
+             "jump_hind": [(e["time"], OTHER[e["side"]]) for e in events if e["event"] == "heel_strike"]}
+    for key, boundaries in kinds.items():
+        per_boundary = []
+        for tb, side in boundaries:
+            if t_lo - 1e-9 <= tb <= t_hi + 1e-9:
+                j = rate_jump(deg[:, own_leg[side]], t, fps, tb)
+                if not np.all(np.isnan(j)):
+                    per_boundary.append((tb, float(np.nanmax(j))))
+        for _, t0, t1 in cycles:
             inside = [j for tb, j in per_boundary if t0 - 1e-9 <= tb < t1 - 1e-9]
             if inside:
                 vals[key].append(max(inside))
