@@ -26,7 +26,7 @@ EXPECTED_DEFAULTS = {
     "midstance_leg_shortening": 0.004, "hip_rise_fraction": 0.5, "hip_fall_fraction": 0.45, "hip_fall_power": 1.5,
     "min_hip_excursion_rel": 0.01, "pelvic_rotation": 4,
     "pelvic_list": 5, "pelvic_lateral_shift": 0.02, "foot_lateral_distance": 0.08,
-    "arm_swing_amplitude": 20,
+    "arm_swing_amplitude": 15,
 }
 
 

@@ -123,3 +123,9 @@ def test_the_late_stance_ankle_is_the_geometry_of_eq_3(people):
     (docs/human-gait.md); the test holds the peak where it is, so that a change is seen."""
     for speed, most in ((3.0, 17.0), (5.0, 22.5), (6.0, 24.5)):
         assert people[speed].worst("ankle_df") <= most, speed
+
+
+def test_the_arms_swing_as_people_s_and_more_when_faster(people):
+    """Shoulder flexion range 30-40° at 5 km/h (Murray et al. 1967), growing with speed."""
+    assert 30 <= people[5.0].worst("shoulder_range", high=False) and people[5.0].worst("shoulder_range") <= 40
+    assert people[3.0].mean("shoulder_range") < people[5.0].mean("shoulder_range") < people[6.0].mean("shoulder_range")

@@ -160,7 +160,8 @@ def test_the_shoulder_half_range_is_the_attribute_at_the_reference_hip_range(amp
 
 def test_elbows_stay_flexed_and_bend_more_in_front():
     phase, hips = sinusoidal_hips()
-    upper = upper_body_motion(DEFAULTS, phase, np.zeros_like(phase), hips)
+    # a swing of ±20° (the default's at about 6 km/h; docs/upper-body.md)
+    upper = upper_body_motion(attrs(arm_swing_amplitude=20.0), phase, np.zeros_like(phase), hips)
     for side in ("right", "left"):
         elbow = np.degrees(upper.elbow_flexion[side])
         assert 15.0 <= elbow.min() <= 20.0 and 35.0 <= elbow.max() <= 45.0   # people's range

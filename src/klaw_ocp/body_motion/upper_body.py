@@ -41,7 +41,7 @@ SHOULDER_MEAN_FLEXION = 0.0
 #: A small constant abduction so that the hands pass clear of the hips.
 SHOULDER_ABDUCTION = math.radians(5.0)
 #: Elbow flexion = base + share * (shoulder flexion - its mean), never below the minimum: with the
-#: default swing (±20°) the elbow goes from 18° at the back of the swing to 38° in front, as in
+#: swing of ±20° (the default at about 6 km/h) the elbow goes from 18° at the back of the swing to 38° in front, as in
 #: people (about 15-20° behind, 35-45° in front).
 ELBOW_BASE_FLEXION = math.radians(28.0)
 ELBOW_SHOULDER_SHARE = 0.5

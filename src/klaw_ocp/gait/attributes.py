@@ -178,7 +178,7 @@ _SPECS = [
           "§4.2: lateral displacement, 'a maximum shortly after toe-off'; value " + _OURS),
     _spec("determinants", "foot_lateral_distance", "m", 0.08, 0.0, 0.4,
           "§5 attributes: lateral distance between the feet (their centrelines, docs/body.md); value " + _OURS),
-    _spec("determinants", "arm_swing_amplitude", "deg", 20.0, 0.0, 60.0,
+    _spec("determinants", "arm_swing_amplitude", "deg", 15.0, 0.0, 60.0,
           "§2.4 principle 3: 'the arms … swing forward with the opposite legs'; amplitude " + _OURS),
 ]
 
