@@ -6,7 +6,7 @@ With its heel up, the foot turns about its first metatarsal head up to the meta-
 about its toe tip up to MAX_PITCH, the pivot passing from one to the other over a narrow band about
 q (:func:`.leg_geometry.toe_flexion`). Outside that band the ankle moves on a circle about the
 pivot, so "the ankle is R from the hip" is a circle intersection, in closed form; inside it the
-root is found by a few bracketed secant steps. Both pivots are evaluated in one pass (their
+root is found by a few safeguarded Newton steps. Both pivots are evaluated in one pass (their
 constants stacked as (2, 1) columns against the n hips), and the least root wins.
 """
 from __future__ import annotations
@@ -25,8 +25,8 @@ MAX_PITCH = math.radians(89)
 #: Slack of the pieces' pitch ranges at their joins (rad): round-off must not drop a root that lies
 #: on a join.
 _EDGE = 1e-15
-#: bracketed secant (Illinois) steps for a root in the meta-off band: the band is a few degrees and
-#: the distance nearly linear in the pitch there, so this is far below 1e-12 rad
+#: at most this many safeguarded Newton steps for a root in the meta-off band (from the secant of
+#: its ends, 3-4 reach 1e-14 rad: the distance is nearly linear in the pitch there)
 _BAND_STEPS = 30
 
 
@@ -95,27 +95,49 @@ def _least(g: HeelUp, candidates) -> np.ndarray:
     return np.where(inside, np.maximum(candidates, g.lo), np.inf).reshape(-1, candidates.shape[-1]).min(axis=0)
 
 
-def _band_root(foot: FlatFoot, q: float, band: float, hips: np.ndarray, radius: np.ndarray) -> np.ndarray:
+def _band_root(foot: FlatFoot, q: float, band: float, hips: np.ndarray, radius: np.ndarray,
+               far: np.ndarray, near: np.ndarray) -> np.ndarray:
     """The pitch in [q - band, q + band] at which the ankle is ``radius`` from each hip, where the
-    distance falls through it over the band (Illinois steps on the bracket)."""
-    pieces = foot_pieces(foot.body, q)
-
-    def excess(p):
-        ankle = pieces.turned(foot.ankle_x, p, slice(1, 2))[:, 0]
-        return np.hypot(ankle[:, 0] - hips[:, 0], ankle[:, 1] - hips[:, 1]) - radius
+    distance falls through it over the band (``far``, ``near``: the excess of the distance over the
+    radius at the band's ends). In the band the toe segment rises by β = (p - q + band)²/(4 band)
+    about the toe tip and the rest of the foot turns by p about the metatarsal head it carries, so
+    the ankle and its derivative are a few terms: Newton's steps from the secant of the ends, kept
+    in the bracket."""
+    body = foot.body
+    off_x, off_y = -body.metatarsal_reach, body.l9               # the flat ankle less the flat head
+    toe_x = foot.ankle_x + body.metatarsal_reach + body.l13
     a, b = np.full(len(hips), q - band), np.full(len(hips), q + band)
-    fa, fb = excess(a), excess(b)
+    fa, fb = far, near
+    p = a + (b - a) * fa / (fa - fb)
     for _ in range(_BAND_STEPS):
-        going = (fb != 0) & (np.abs(b - a) > 1e-15)       # a root found stays found
-        if not going.any():
-            break
-        c = b - fb * (b - a) / np.where(fb != fa, fb - fa, 1.0)
-        c = np.where((c > np.minimum(a, b)) & (c < np.maximum(a, b)), c, 0.5 * (a + b))
-        fc = excess(c)
-        swap = fc * fb < 0
-        a, fa = np.where(going & swap, b, a), np.where(going, np.where(swap, fb, 0.5 * fa), fa)
-        b, fb = np.where(going, c, b), np.where(going, fc, fb)
-    return b
+        rise = (p - q + band) ** 2 / (4 * band)
+        c, s, cb, sb = np.cos(p), np.sin(p), np.cos(rise), np.sin(rise)
+        ax = toe_x - body.l13 * cb + (c * off_x + s * off_y) - hips[:, 0]
+        ay = body.l13 * sb + (-s * off_x + c * off_y) - hips[:, 1]
+        dist = np.hypot(ax, ay)
+        g = dist - radius
+        rate = (p - q + band) / (2 * band)
+        dax = body.l13 * sb * rate + (-s * off_x + c * off_y)
+        day = body.l13 * cb * rate + (-c * off_x - s * off_y)
+        slope = (ax * dax + ay * day) / dist
+        # the bracket (g falls with p), then a Newton step, or the bisection where it leaves it
+        a, b = np.where(g > 0, p, a), np.where(g > 0, b, p)
+        step = p - g / np.where(slope != 0, slope, -1.0)
+        inside = (step >= a) & (step <= b)
+        new = np.where(inside, step, 0.5 * (a + b))
+        if np.all(np.abs(new - p) <= 1e-14):
+            return new
+        p = new
+    return p
+
+
+@lru_cache(maxsize=64)
+def _band_ends(body: Body, meta_off_theta6: float) -> np.ndarray:
+    """The ankle (2, 2) at the meta-off band's two ends, its flat ankle at x = 0."""
+    g = heel_up(body, meta_off_theta6)
+    ends = foot_pieces(body, meta_off_theta6).turned(0.0, np.array([g.q - g.band, g.q + g.band]), slice(1, 2))[:, 0]
+    ends.flags.writeable = False
+    return ends
 
 
 def reach_pitch(foot: FlatFoot, meta_off_theta6: float, hips: np.ndarray, radius) -> np.ndarray:
@@ -126,18 +148,17 @@ def reach_pitch(foot: FlatFoot, meta_off_theta6: float, hips: np.ndarray, radius
     radius = np.broadcast_to(np.asarray(radius, float), (len(hips),))
     dx, dy = (g.pivot_x + foot.ankle_x) - hips[:, 0], g.pivot_y - hips[:, 1]
     pitch = _least(g, _on_circle(g, dx, dy, np.hypot(dx, dy), radius))
+    reaches_flat = np.hypot(foot.ankle[0] - hips[:, 0], foot.ankle[1] - hips[:, 1]) <= radius
     if g.band > 0:
         # no root about the metatarsal head: where the band's ends bracket the reach, the root is in it
-        pieces = foot_pieces(foot.body, meta_off_theta6)
-        missing = pitch > g.q - g.band + _EDGE
+        missing = (pitch > g.q - g.band + _EDGE) & ~reaches_flat
         if missing.any():
-            ends = pieces.turned(foot.ankle_x, np.array([g.q - g.band, g.q + g.band]), slice(1, 2))[:, 0]
+            ends = _band_ends(foot.body, meta_off_theta6)
             h, rad = hips[missing], radius[missing]
-            far = np.hypot(ends[0, 0] - h[:, 0], ends[0, 1] - h[:, 1]) > rad
-            near = np.hypot(ends[1, 0] - h[:, 0], ends[1, 1] - h[:, 1]) <= rad
-            inside = np.flatnonzero(missing)[far & near]
+            far = np.hypot(ends[0, 0] + foot.ankle_x - h[:, 0], ends[0, 1] - h[:, 1]) - rad
+            near = np.hypot(ends[1, 0] + foot.ankle_x - h[:, 0], ends[1, 1] - h[:, 1]) - rad
+            bracket = (far > 0) & (near <= 0)
+            inside = np.flatnonzero(missing)[bracket]
             if inside.size:
-                pitch[inside] = _band_root(foot, g.q, g.band, hips[inside], radius[inside])
-    pitch = np.minimum(pitch, MAX_PITCH)
-    reaches_flat = np.hypot(foot.ankle[0] - hips[:, 0], foot.ankle[1] - hips[:, 1]) <= radius
-    return np.where(reaches_flat, 0.0, pitch)
+                pitch[inside] = _band_root(foot, g.q, g.band, hips[inside], radius[inside], far[bracket], near[bracket])
+    return np.where(reaches_flat, 0.0, np.minimum(pitch, MAX_PITCH))
