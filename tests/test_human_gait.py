@@ -42,7 +42,7 @@ def test_the_dimensionless_speed_of_the_natural_walk():
 # -- the walk against people (issue #34's acceptance) ---------------------------------------------
 
 from klaw_ocp.human_gait import FIGURES, human_figures          # noqa: E402
-from klaw_ocp.kinematics.body_motion import body_motion         # noqa: E402
+from klaw_ocp.body_motion import body_motion         # noqa: E402
 from klaw_ocp.walk import simulate_walk                          # noqa: E402
 
 #: steps per walk: 2 of start and 4 more, so that each leg has steady cycles

@@ -6,7 +6,7 @@ its heel strikes and toe-offs (:func:`~klaw_ocp.figures.gait_diagram.gait_events
   laboratories show them: every cycle thin, their mean bold, the mean toe-off marked (a long
   walk's thin lines only for the cycles of the steps the other plots draw, plot_style.drawn_steps).
 - ``body.png``: the skeleton at the heel strikes that open the steps, drawn side on from the
-  forward kinematics of the angles (:func:`klaw_ocp.kinematics.skeleton.forward_kinematics`), with
+  forward kinematics of the angles (:func:`klaw_ocp.body_motion.skeleton.forward_kinematics`), with
   the dynamic model of ``legs.png`` over it (the new stance leg's telescope, the hind leg with the
   virtual leg's angles, the upper body), so that the two can be seen to agree. (At the walk's last
   heel strike the model would show the leg finishing its stance as a telescope, which has no knee
