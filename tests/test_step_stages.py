@@ -9,39 +9,30 @@ import math
 
 import numpy as np
 import pytest
+from _walk_checks import record_walk
 
-from klaw_ocp.control.step import StepController
 from klaw_ocp.control.stance_law import STANCE_CONTEXT
 from klaw_ocp.control.swing_law import SWING_CONTEXT, curve_p
 from klaw_ocp.dynamics import hip_kinematics, stance_accelerations, swing_accelerations
 from klaw_ocp.dynamics.evaluate import evaluate
-from klaw_ocp.walk import simulate_walk
 
 CONFIG = {"name": "stages", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": 4}}
 START = {"name": "stages-start", "body": {"height": 1.7, "mass": 65},
          "walk": {"speed": 3.0, "steps": 3, "start_from_rest": True, "end_at_rest": True}}
 
 
-def _recorded(config: dict, method: str, monkeypatch):
+def _recorded(config: dict, method: str):
     """The walk and the subphase problems its steps were solved from, with their solutions (the
-    last solve of each step and subphase: a walking start searches its first stance first)."""
-    solved = {}
-    original = StepController._solve
-
-    def recording(self, step, problem, remember=True):
-        solution = original(self, step, problem, remember)
-        solved[(step, problem.spec.name)] = (step, problem, solution)
-        return solution
-    monkeypatch.setattr(StepController, "_solve", recording)
-    walk = simulate_walk(config, method=method)
+    last solve of each step and subphase, _walk_checks.record_walk)."""
+    recorded = record_walk(config, method)
+    walk = recorded.walk
     assert [s.index for s in walk.steps] == list(range(len(walk.steps)))
-    return walk, list(solved.values())
+    return walk, [(step, problem, solution) for (step, _), (problem, solution) in recorded.problems.items()]
 
 
 @pytest.fixture(scope="module", params=["multiple-shooting", "plain-shooting"])
 def walks(request):
-    with pytest.MonkeyPatch.context() as monkeypatch:
-        return [_recorded(config, request.param, monkeypatch) for config in (CONFIG, START)]
+    return [_recorded(config, request.param) for config in (CONFIG, START)]
 
 
 def test_curve_p_peaks_at_swing_peak_position_of_its_travel(walks):

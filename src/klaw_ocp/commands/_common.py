@@ -84,3 +84,12 @@ def check_output_dir(path, field: str = "--out") -> Path:
         raise ConfigError(f"{field}: got {short_repr(text)} ({exc.strerror or type(exc).__name__}), "
                           f"allowed {allowed}") from None
     return folder
+
+
+def compile_notice():
+    """The block within which a first compile of the solver kernels is said on one line of
+    stderr before the pause (klaw_ocp.console.CompileNotice), for every command that solves."""
+    from ..console import CompileNotice
+    from ..solvers.kernels import compile_notices
+    from . import PROG
+    return compile_notices(CompileNotice(PROG))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from . import EXIT_OK, PROG
+from . import EXIT_OK
 from .run import add_force_option, keeping, report_unfinished
 
 HELP = "regenerate results/paper/: the paper's figures 8 and 10 and its numbers beside ours"
@@ -29,15 +29,13 @@ def handle(args: argparse.Namespace) -> int:
     from ..errors import ConvergenceError
     from ..result_files.results_folder import StagedFolder
     from ..reproduce import check_configs, reproduce
-    from ._common import check_output_dir
+    from ._common import check_output_dir, compile_notice
     t0 = time.perf_counter()
     out = check_output_dir(args.out, "--out")
     check_configs(args.configs)                                   # before any walk
     staged = StagedFolder(out, "reproduce", force=args.force)    # refused here, before any walk
     staging = staged.open()
-    from ..console import CompileNotice
-    from ..solvers.kernels import compile_notices
-    with keeping(staged, lambda: "what was drawn"), compile_notices(CompileNotice(PROG)):
+    with keeping(staged, lambda: "what was drawn"), compile_notice():
         try:
             written = reproduce(args.configs, staging, progress=not args.quiet)
         except ConvergenceError as exc:

@@ -113,12 +113,11 @@ def walk_into(writer, spec, quiet: bool = True):
     failure): outcome "ok", "failed" (failure: the ConvergenceError) or "interrupted". If the
     solver kernels have to be compiled (the first run on a machine), one line on stderr says so
     before the pause, even with ``quiet``: it is the one pause a user cannot otherwise explain."""
-    from ..console import CompileNotice
     from ..errors import ConvergenceError
-    from ..solvers.kernels import compile_notices
     from ..walk import Walk, simulate_walk
+    from ._common import compile_notice
     try:
-        with compile_notices(CompileNotice(PROG)):
+        with compile_notice():
             return simulate_walk(spec, progress=not quiet, on_step=writer.step), "ok", None
     except ConvergenceError as exc:
         return exc.partial, "failed", exc

@@ -56,7 +56,7 @@ def handle(args: argparse.Namespace) -> int:
         if path in vary:
             raise ConfigError(f"--vary {path}: got the path twice, allowed each path once")
         vary[path] = values
-    from ._common import check_output_dir
+    from ._common import check_output_dir, compile_notice
     out = check_output_dir(args.out if args.out is not None else default_out_dir(args.config), "--out")
     staged = StagedFolder(out, "sweep", force=args.force)       # refused here, before any walk
 
@@ -69,9 +69,7 @@ def handle(args: argparse.Namespace) -> int:
         # no finished walk is lost
         append_sweep_row(staging() / SWEEP_CSV, row, list(vary))
 
-    from ..console import CompileNotice
-    from ..solvers.kernels import compile_notices
-    with keeping(staged, lambda: "the walks finished so far"), compile_notices(CompileNotice(PROG)):
+    with keeping(staged, lambda: "the walks finished so far"), compile_notice():
         try:
             rows = run_sweep(args.config, vary, methods=args.method, workers=args.workers,
                              scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),
