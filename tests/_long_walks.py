@@ -23,7 +23,7 @@ def tiled(run: RunData, copies: int, name: str | None = None) -> RunData:
         summary["steps"] += [dict(s, index=s["index"] + k * len(steps), t_start_s=s["t_start_s"] + dt,
                                   origin_x_m=s["origin_x_m"] + dx) for s in steps]
         summary["events"] += [dict(e, time=e["time"] + dt) for e in run.summary.get("events", [])]
-        shift = {"t": dt, "hip_x": dx, "step": k * len(steps), "time": dt, "root_x": dx}
+        shift = {"t": dt, "hip_x": dx, "swing_hip_x": dx, "step": k * len(steps), "time": dt, "root_x": dx}
         for source, target in ((run.table, table), (run.angles, angles)):
             for column, values in source.items():
                 target[column].append(values + shift[column] if column in shift else values)

@@ -56,7 +56,8 @@ def test_plan_human_output_lists_parameters_timings_constraints(capsys):
     code, out, _ = run_main(capsys, "plan", "--speed", "5")
     assert code == 0
     for text in ("Locomotion parameters (eq. 1)", "107.58", "State-phase timings (eq. 2)",
-                 "t_ds", "Step constraints at heel strike (eq. 3)", "0.8961", "0.4469", "-0.4205"):
+                 "t_ds", "Step constraints at heel strike (eq. 3)", "0.8956", "0.4394", "-0.4134",
+                 "landing hip ahead by", "0.0126"):
         assert text in out
 
 

@@ -111,11 +111,13 @@ def test_a_short_double_support_starts_the_push_off_in_single_support():
 
 
 def _hip_track(walk, step, axis):
-    """The hip's ``axis`` coordinate over the stance leg's time: its own stance, then the next
-    step's double support."""
+    """The leg's hip's ``axis`` coordinate over the stance leg's time: its own stance (the
+    simulated hip), then the next step's double support (the pelvis's other hip there)."""
     after = walk.steps[step.index + 1]
-    t = np.r_[step.subphase("stance").t, step.plan.timings.t_step + after.subphase("stance").t[1:]]
-    return t, np.r_[step.stance_hips[:, axis], after.stance_hips[1:, axis]]
+    later = after.subphase("stance").t[1:]
+    offset = after.pelvis.swing_hip_offset(later)[0][axis]
+    t = np.r_[step.subphase("stance").t, step.plan.timings.t_step + later]
+    return t, np.r_[step.stance_hips[:, axis], after.stance_hips[1:, axis] + offset]
 
 
 def test_a_walking_start_begins_with_the_hind_leg_on_its_schedule(natural):

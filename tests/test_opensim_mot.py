@@ -280,10 +280,21 @@ def test_a_walk_written_and_read_back_is_its_mapping(walk_table, tmp_path):
         np.testing.assert_allclose(read[f"ankle_angle_{side}"], table[f"{side}_ankle_dorsiflexion"], atol=1e-6)
     np.testing.assert_allclose(read["pelvis_tilt"], -table["pelvis_tilt"], atol=1e-6)
     assert np.ptp(read["knee_angle_r"]) > 30 and read["knee_angle_r"].max() < 1e-6     # a walk, knees flexing
-    # the pelvis height: the model's hips at the scaled height of ours, the feet on the ground
+    # the pelvis height: the model's hips at the scaled height of ours, the feet on the ground. The
+    # midpoint of gait2392's hip centres, (-0.0707, -0.0661, 0) in the pelvis frame, turned by the
+    # file's own pelvis coordinates (OpenSim's pelvis: body-fixed Z (tilt), X (list), Y (rotation),
+    # degrees) from pelvis_t*, is our root scaled
     k = translation_scale(body)
-    level = np.abs(read["pelvis_tilt"]) < 1e-9
-    np.testing.assert_allclose(read["pelvis_ty"][level] - 0.0661, k * table["root_y"][level], atol=1e-6)
+    tilt, lst, rot = (np.radians(read[f"pelvis_{name}"]) for name in ("tilt", "list", "rotation"))
+    c, s_ = np.cos, np.sin
+    rz = lambda a: np.array([[c(a), -s_(a), 0], [s_(a), c(a), 0], [0, 0, 1]])
+    rx = lambda a: np.array([[1, 0, 0], [0, c(a), -s_(a)], [0, s_(a), c(a)]])
+    ry = lambda a: np.array([[c(a), 0, s_(a)], [0, 1, 0], [-s_(a), 0, c(a)]])
+    mid = np.array([-0.0707, -0.0661, 0.0])
+    hips = np.array([rz(a) @ rx(b) @ ry(g) @ mid for a, b, g in zip(tilt, lst, rot)])
+    origin = np.column_stack([read["pelvis_tx"], read["pelvis_ty"], read["pelvis_tz"]])
+    root = np.column_stack([table["root_x"], table["root_y"], table["root_z"]])
+    np.testing.assert_allclose(origin + hips, k * root, atol=1e-6)
 
 
 def test_angles_csv_read_back_gives_the_same_file(walk_table, tmp_path):

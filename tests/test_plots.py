@@ -217,7 +217,7 @@ def test_pose_points_are_the_models_geometry(start_stop):
     rows = np.arange(len(table["t"]))
     p = pose_points(start_stop, rows)
     assert np.allclose(np.linalg.norm(p["hip"] - p["stance_ankle"], axis=1), table["w"], atol=1e-9)
-    assert np.allclose(np.linalg.norm(p["hip"] - p["knee"], axis=1), body["l3"])
+    assert np.allclose(np.linalg.norm(p["swing_hip"] - p["knee"], axis=1), body["l3"])
     assert np.allclose(np.linalg.norm(p["knee"] - p["swing_ankle"], axis=1), body["l4"])
     assert np.allclose(np.linalg.norm(p["head"] - p["hip"], axis=1), body["l2"])
     assert np.allclose(p["stance_ankle"][:, 1], body["l9"])
@@ -227,7 +227,7 @@ def test_pose_points_are_the_models_geometry(start_stop):
     from klaw_ocp.dynamics import swing_leg_points
     model = Body(height=body["height"], mass=body["mass"])
     for r in rows[:: max(1, len(rows) // 25)]:
-        points = swing_leg_points(model, [table["theta3"][r], table["theta4"][r]], p["hip"][r])
+        points = swing_leg_points(model, [table["theta3"][r], table["theta4"][r]], p["swing_hip"][r])
         assert np.allclose(points["knee"], p["knee"][r], atol=1e-12)
         assert np.allclose(points["ankle"], p["swing_ankle"][r], atol=1e-12)
     # the legs alternate: the swing leg of step k is the stance leg of step k + 1 ...

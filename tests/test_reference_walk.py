@@ -55,11 +55,12 @@ REFERENCE = json.loads(MAKER.REFERENCE.read_text())
 BODY = load_config(MAKER.CONFIG).body_model()
 RTOL = 1e-6
 #: Per unit, a size below which a parameter does not change the walk; the absolute floor of the
-#: comparison is RTOL times it. Torques: a thousandth of the body's weight on a leg-length lever
-#: (0.68 N m at 80 kg, 1.8 m; the smallest stored torque is 8.8 N m). Lengths (pa): 1e-4 of the leg
+#: comparison is RTOL times it. Torques: 1e-4 of the body's weight on a leg-length lever
+#: (0.068 N m at 80 kg, 1.8 m; the smallest stored torque is step 0's swing1 hip torque, 0.62 N m,
+#: since the pelvis lowers the swing hip). Lengths (pa): 1e-4 of the leg
 #: (87 um; the smallest non-zero stored pa knot is 263 um). Angles (the swing2 hip actuator, which
 #: the recovery loop moves in steps of 0.005 rad): 1e-4 rad.
-NEGLIGIBLE = {"N m": 1e-3 * BODY.mass * BODY.g * BODY.l1, "m": 1e-4 * BODY.l1, "rad": 1e-4}
+NEGLIGIBLE = {"N m": 1e-4 * BODY.mass * BODY.g * BODY.l1, "m": 1e-4 * BODY.l1, "rad": 1e-4}
 #: the same for the initial state [w, theta1, theta2, wd, theta1d, theta2d] (rates: per second)
 STATE_NEGLIGIBLE = np.array([1e-4 * BODY.l1, 1e-4, 1e-4, 1e-4 * BODY.l1, 1e-4, 1e-4])
 
@@ -187,11 +188,32 @@ def curve_p(n, s):
     return (((a[0] * s + a[1]) * s + a[2]) * s + a[3]) * s + a[4], ((4 * a[0] * s + 3 * a[1]) * s + 2 * a[2]) * s + a[3]
 
 
+def pelvis_offset(n, t):
+    """The swing-side hip minus the stance hip (§4.2's pelvis, written out here from the rule in
+    docs/body.md): rotation from rotation_start at heel strike through 0 at mid-step to
+    -rotation_end, list 0 -> pelvis_list -> 0 as half cosines of the step's time; the hip sits
+    pelvis_width across the pelvis turned by the rotation and tilted by the list. Its velocity and
+    acceleration by central differences (h = 1e-4 s: truncation and round-off both below 1e-9)."""
+    def at(time):
+        phase = math.pi * time / n["swing_end_time"]
+        rotation = (n["pelvis_rotation_start"] + n["pelvis_rotation_end"]) * (1 + math.cos(phase)) / 2 \
+            - n["pelvis_rotation_end"]
+        tilt = n["pelvis_list"] * math.sin(phase) ** 2
+        return np.array([-n["pelvis_width"] * math.sin(rotation),
+                         -n["pelvis_width"] * math.cos(rotation) * math.sin(tilt)])
+    h = 1e-4
+    before, here, after = at(t - h), at(t), at(t + h)
+    return here, (after - before) / (2 * h), (after - 2 * here + before) / (h * h)
+
+
 def swing_rates(name, t, x, u, n, before_off):
-    """The stance carried along (its parameters are in the context) and the swing leg on its hip."""
+    """The stance carried along (its parameters are in the context) and the swing leg on the
+    pelvis's other hip."""
     p_stance = {k[len("stance_"):]: v for k, v in n.items() if k.startswith("stance_")}
     rates, qdd = stance_rates(t, x[0:6], p_stance, n, before_off)
     pos, hip_vel, hip_acc = hip_kinematics(BODY, x[0:3], x[3:6], qdd)
+    offset, offset_vel, offset_acc = pelvis_offset(n, t)
+    pos, hip_vel, hip_acc = pos + offset, hip_vel + offset_vel, hip_acc + offset_acc
     hold = lambda th3, th3d, shift=0.0: n["k_h"] * (n["theta3_target"] + shift - th3) - n["d_h"] * th3d
     if name == "swing1":   # knee locked for the dynamics; theta4 keeps the ankle on curve P
         th3, th4, th3d = x[6:9]

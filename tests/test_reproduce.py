@@ -9,7 +9,7 @@ from matplotlib.image import imread
 from klaw_ocp.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-FILES = {"README.md", "fig8.png", "fig10.png", "acceleration.png", "comparison.png", "comparison.csv",
+FILES = {"README.md", "fig8.png", "figure9_pelvic_list.png", "fig10.png", "acceleration.png", "comparison.png", "comparison.csv",
          "numbers.json", "natural_hip_height.png", "natural_gait_diagram.png", ".klaw-ocp"}
 
 

@@ -15,6 +15,7 @@ from klaw_ocp.control.stance_law import STANCE_CONTEXT
 from klaw_ocp.control.swing_law import SWING_CONTEXT, curve_p
 from klaw_ocp.dynamics import hip_kinematics, stance_accelerations, swing_accelerations
 from klaw_ocp.dynamics.evaluate import evaluate
+from klaw_ocp.kinematics.pelvis import PelvisSchedule
 
 CONFIG = {"name": "stages", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": 4}}
 START = {"name": "stages-start", "body": {"height": 1.7, "mass": 65},
@@ -80,10 +81,11 @@ def _stance_part(body, problem, x, t, u):
 
 
 def test_the_swing_sees_the_stance_models_hip_acceleration(walks):
-    """Assumption 4: the swing leg hangs from the stance model's hip. At every node of every swing
-    subphase, the swing's right-hand side equals the swing dynamics (Appendix A.2) driven by the
-    hip acceleration of the stance model (Appendix A.1) at the same state, and its stance part
-    the stance model's own rates."""
+    """Assumption 4 with the pelvis (§4.2): the swing leg hangs from the pelvis's other hip. At
+    every node of every swing subphase, the swing's right-hand side equals the swing dynamics
+    (Appendix A.2) driven by the hip acceleration of the stance model (Appendix A.1) at the same
+    state plus the pelvis offset's (kinematics/pelvis.py, from the context's pelvis numbers), and
+    its stance part the stance model's own rates."""
     checked = 0
     for walk, solved in walks:
         body = walk.spec.body
@@ -96,6 +98,10 @@ def test_the_swing_sees_the_stance_models_hip_acceleration(walks):
                 x, t = solution.states[k], solution.t[k]
                 xdot = evaluate(problem.spec.rhs, x, t, u, problem.context)[0]
                 forces, qdd, hip_acc = _stance_part(body, problem, x, t, u)
+                c = {key: problem.context[i] for key, i in SWING_CONTEXT.index.items()}
+                pelvis = PelvisSchedule(c["pelvis_width"], c["pelvis_rotation_start"], c["pelvis_rotation_end"],
+                                        c["pelvis_list"], c["swing_end_time"])
+                hip_acc = np.asarray(hip_acc) + np.array(pelvis.swing_hip_offset(t)[2])
                 np.testing.assert_allclose(xdot[0:3], x[3:6], rtol=0, atol=1e-12)
                 np.testing.assert_allclose(xdot[3:6], qdd, rtol=1e-9, atol=1e-9)
                 if name == "swing1":      # the knee locked for the dynamics (eq. 5)

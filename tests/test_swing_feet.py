@@ -61,6 +61,8 @@ def _per_step_clearance(body, step, hips):
     x = np.vstack([sub.states[:, :7] for sub in subs])
     theta4 = np.concatenate([sub.states[:, 7] if sub.name != "swing3" else np.zeros(len(sub.t)) for sub in subs])
     hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
+    (dx, dy), _, _ = step.pelvis.swing_hip_offset(t)   # the leg hangs from the pelvis's other hip
+    hips = hips + np.column_stack([dx, dy])
     shank = x[:, 6] + theta4
     ankle = hips - body.l3 * np.column_stack([np.sin(x[:, 6]), np.cos(x[:, 6])]) \
         - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])

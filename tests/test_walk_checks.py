@@ -50,13 +50,14 @@ def test_every_heel_strike_is_the_eq3_posture(grid_walk):
     body, attrs = grid_walk.body, grid_walk.walk.spec.attributes
     for step in _steps(grid_walk):
         sl = step.plan.constraints.step_length
-        expected = eq3_landing(body, sl, attrs.theta5_impact)
+        expected = eq3_landing(body, sl, attrs.theta5_impact, attrs.pelvic_rotation)
         stance_end = step.subphase("stance").states[-1]
         hip = world_hips(body, stance_end[None, :], step.origin_x)[0]
         assert hip - [step.origin_x, body.l9] == pytest.approx(expected["hip"], abs=1e-7), step.index
         assert step.subphase("swing2").states[-1][7] == pytest.approx(0.0, abs=1e-7)   # knee straight at t2
         swing_end = step.subphase("swing3").states[-1]
-        foot = swing_leg_points(body, (swing_end[6], 0.0), hip, math.radians(attrs.theta5_impact),
+        landing_hip = expected["landing_hip"] + [step.origin_x, body.l9]     # the pelvis's other hip
+        foot = swing_leg_points(body, (swing_end[6], 0.0), landing_hip, math.radians(attrs.theta5_impact),
                                 math.radians(attrs.theta6_impact))
         # Table B-1's l11 (eq. 3) and the foot's sqrt(l8² + l9²) agree to its 4 digits
         assert foot["heel"] == pytest.approx([step.origin_x + expected["heel_x"], 0.0], abs=5e-5), step.index
@@ -81,20 +82,25 @@ def test_every_subphase_lasts_what_eq2_says(grid_walk):
 
 def test_each_stance_starts_where_the_heel_strike_map_puts_it(grid_walk):
     """The stance origin advances by the step length, the hind leg's ankle is the previous stance
-    ankle, and across heel strike the hip's position and velocity, θ2 and θ̇2 are continuous, so
-    the quantities the map conserves (dynamics.CONSERVED) are the same before and after."""
+    ankle, and across heel strike the stance model's hip passes to the landing leg's hip (the
+    pelvis's other one, l0 sin(rotation) ahead, kinematics/pelvis.py) with the hip's velocity, θ2
+    and θ̇2 continuous, so the quantities the map conserves (dynamics.CONSERVED) are the same
+    before, moved to that hip, and after."""
     body, steps = grid_walk.body, _steps(grid_walk)
+    rotation = math.radians(grid_walk.walk.spec.attributes.pelvic_rotation)
     for before, after in zip(steps, steps[1:]):
         sl = before.plan.constraints.step_length
+        shift = body.l0 * math.sin(rotation) if sl > 0 else 0.0
+        assert before.plan.constraints.hip_shift == pytest.approx(shift, abs=1e-15)
         assert after.origin_x - before.origin_x == pytest.approx(sl, abs=1e-12)
         assert after.hind_ankle_x == pytest.approx(before.origin_x, abs=1e-12)
         pre, post = before.subphase("stance").states[-1], after.subphase("stance").states[0]
-        assert post == pytest.approx(heel_strike_map(body, pre, (sl, 0.0)), abs=1e-12)
+        assert post == pytest.approx(heel_strike_map(body, pre, (sl, 0.0), hip_shift=(shift, 0.0)), abs=1e-12)
         assert world_hips(body, post[None], after.origin_x) == pytest.approx(
-            world_hips(body, pre[None], before.origin_x), abs=1e-12)
+            world_hips(body, pre[None], before.origin_x) + [shift, 0.0], abs=1e-12)
         assert world_hip_velocities(post[None]) == pytest.approx(world_hip_velocities(pre[None]), abs=1e-10)
         assert (post[2], post[5]) == pytest.approx((pre[2], pre[5]), abs=1e-14)
-        old, new = np.array([before.origin_x, body.l9]), np.array([after.origin_x, body.l9])
+        old, new = np.array([before.origin_x + shift, body.l9]), np.array([after.origin_x, body.l9])
         kept = heel_strike_conserved(body, pre, old, about=new)
         now = heel_strike_conserved(body, post, new)
         for key in CONSERVED:
@@ -103,8 +109,9 @@ def test_each_stance_starts_where_the_heel_strike_map_puts_it(grid_walk):
 
 def test_the_hip_advances_one_step_length_per_step(grid_walk):
     """A step that starts from the mirror of an equal step's heel strike (every step after the
-    first at a constant speed, and the first of a walk that starts walking) moves the hip by sl,
-    so the mean speed is sl·sf."""
+    first at a constant speed, and the first of a walk that starts walking) moves the pelvis's
+    centre (the stance hip plus half the offset to the other hip, kinematics/pelvis.py) by sl, so
+    the mean speed is sl·sf."""
     body, walk = grid_walk.body, grid_walk.walk
     steady = []
     for step in _steps(grid_walk):
@@ -115,8 +122,10 @@ def test_the_hip_advances_one_step_length_per_step(grid_walk):
             continue
         states = step.subphase("stance").states
         hips = world_hips(body, states[[0, -1]], step.origin_x)
+        (dx, _), _, _ = step.pelvis.swing_hip_offset(np.array([0.0, step.plan.timings.t_step]))
+        centre = hips[:, 0] + dx / 2
         p = step.plan.parameters
-        assert (hips[1, 0] - hips[0, 0]) / step.plan.timings.t_step == pytest.approx(
+        assert (centre[1] - centre[0]) / step.plan.timings.t_step == pytest.approx(
             p.step_length_m * p.step_frequency_spm / 60, rel=1e-7), step.index
         assert p.step_length_m * p.step_frequency_spm * 60 / 1000 == pytest.approx(p.speed_kmh, rel=1e-12)
         steady.append(step.index)

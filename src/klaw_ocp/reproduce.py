@@ -1,9 +1,12 @@
-"""The paper, reproduced: figures 8 and 10, the acceleration of section 5, the two solver modes
+"""The paper, reproduced: figures 8, 9 and 10, the acceleration of section 5, the two solver modes
 compared, and the paper's numbers beside ours, into ``results/paper/`` (``klaw-ocp reproduce``).
 
 - Figure 8: "motion of one leg for two complete walking sequences": 2 km/h for 4 cycles and
   5 km/h for 3 cycles, each starting and ending at rest (configs/start_stop_2kmh.yaml,
   start_stop_5kmh.yaml): the strobe of one leg and the hip height.
+- Figure 9: "pelvic list at toe-off. Left: natural pelvic list, right: accentuated pelvic list":
+  the natural walk (8 steps) with pelvic_list 5 and 12 deg, the body in the frontal plane at a
+  steady toe-off, and the swing hip torque F_theta3, which the lower swing hip changes (§2.4).
 - Figure 10: "heel-strike for 3 walking sequences at v = 5 km/h": natural, short (sl = 0.50 m)
   and long (sl = 1.05 m) steps (natural_walk, short_steps, long_steps): the posture at a steady
   heel strike, side by side, with sl and sf beside the paper's.
@@ -37,6 +40,10 @@ CONFIGS = {"fig8_2kmh": "start_stop_2kmh.yaml", "fig8_5kmh": "start_stop_5kmh.ya
 PAPER = {"natural": {"sl_m": 0.77, "sf_spm": 107.5}, "short": {"sl_m": 0.50, "sf_spm": 166.7},
          "long": {"sl_m": 1.05, "sf_spm": 79.4}, "iterations": (6, 10), "cpu_s_12s_walk": 37.3,
          "cpu_machine": "SUN3-50 with floating point processor"}
+#: figure 9: the natural walk, short, with a natural and an accentuated pelvic list (deg), the step
+#: drawn at its toe-off and the body's frames per second (the posture is interpolated between them)
+FIG9 = {"lists": {"natural": 5.0, "accentuated": 12.0}, "steps": 8, "step": 4, "fps": 240.0}
+FIG9_FILE = "figure9_pelvic_list.png"
 
 
 def check_configs(configs_dir) -> dict[str, Path]:
@@ -68,11 +75,70 @@ def _walk(path: Path, method: str = choices.MULTIPLE_SHOOTING, progress: bool = 
     return run
 
 
+def _fig9_walk(path: Path, list_deg: float, progress: bool = False):
+    """Figure 9's walk: ``path``'s config, FIG9's steps, ``pelvic_list`` = ``list_deg``; its RunData's
+    ``extra["fig9"]``: the swing hip's lowest point below the stance hip in FIG9's step's swing."""
+    from .config_paths import set_path
+    from .config_yaml import read_yaml_file
+    from .result_files import RunData
+    from .walk import simulate_walk
+    config = read_yaml_file(path)
+    for key, value in (("name", f"{config.get('name', path.stem)}_list{list_deg:g}"), ("walk.steps", FIG9["steps"]),
+                       ("attributes.pelvic_list", list_deg), ("output.fps", FIG9["fps"]),
+                       ("output.animation", False)):
+        set_path(config, key, value)
+    try:
+        walk = simulate_walk(config, progress=progress)
+    except ConvergenceError as exc:
+        raise exc.within(f"{path.name} (pelvic_list {list_deg:g})") from None
+    step, t = walk.steps[FIG9["step"]], walk.steps[FIG9["step"]].plan.timings
+    tau = np.linspace(t.t_ds, t.t_step, 401)                       # toe-off to heel strike, step time
+    dy = step.pelvis.swing_hip_offset(tau)[0][1]                   # the pelvis the swing was solved with
+    run = RunData.from_walk(walk)
+    run.extra["fig9"] = {"pelvic_list_deg": list_deg, "swing_hip_low_m": float(dy.min()),
+                         "swing_hip_low_at_s": float(tau[np.argmin(dy)] - t.t_ds)}
+    return run
+
+
 def solve_all(paths: dict[str, Path], progress: bool = False) -> dict:
-    """Every walk of the reproduction: key -> RunData; the natural walk in both modes."""
+    """Every walk of the reproduction: key -> RunData; the natural walk in both modes, and with
+    figure 9's two pelvic lists (``fig9_natural``, ``fig9_accentuated``)."""
     runs = {key: _walk(path, progress=progress) for key, path in paths.items()}
     runs["natural_ps"] = _walk(paths["natural"], choices.PLAIN_SHOOTING, progress)
-    return runs
+    return {**runs, **fig9_runs(paths["natural"], progress)}
+
+
+def fig9_runs(natural: Path, progress: bool = False) -> dict:
+    """Figure 9's walks of the config ``natural``: ``fig9_<key>`` -> RunData for each of FIG9's lists."""
+    return {f"fig9_{key}": _fig9_walk(natural, list_deg, progress) for key, list_deg in FIG9["lists"].items()}
+
+
+def fig9_file(runs: dict) -> tuple[str, bytes]:
+    """Figure 9 as (file name, PNG) from :func:`fig9_runs`' walks."""
+    from .figures.paper_figures import fig9_figure
+    from .figures.plot_style import png_bytes
+    walks = [runs[f"fig9_{key}"] for key in FIG9["lists"]]
+    return FIG9_FILE, png_bytes(fig9_figure(walks, FIG9["step"], list(FIG9["lists"])))
+
+
+def fig9_numbers(runs: dict) -> dict:
+    """Figure 9's numbers per walk: the list, the swing hip's lowest point, the peak swing hip
+    torque (the largest |F_theta3| over the swing, signed) and the swings' torque parameters."""
+    from .figures.paper_figures import swing_hip_torque
+    k, out = FIG9["step"], {}
+    for key in FIG9["lists"]:
+        run = runs[f"fig9_{key}"]
+        t, f, sub = swing_hip_torque(run, k)
+        i = int(np.nanargmax(np.abs(f)))
+        subphases = {s["name"]: s for s in run.steps[k]["subphases"]}
+        out[key] = {**run.extra["fig9"], "step": k, "toe_off_s": run.steps[k]["t_start_s"] + run.steps[k]["t_ds_s"],
+                    "peak_F_theta3_Nm": float(f[i]), "peak_at_s": float(t[i]), "peak_subphase": str(sub[i]),
+                    "parameters": {name: {p: {"value": v, "unit": subphases[name]["units"].get(p, "")}
+                                          for p, v in subphases[name]["parameters"].items()}
+                                   for name in ("swing1", "swing2", "swing3")}}
+    nat, acc = out["natural"]["peak_F_theta3_Nm"], out["accentuated"]["peak_F_theta3_Nm"]
+    out["peak_change_Nm"], out["peak_change_pct"] = acc - nat, 100 * (abs(acc) - abs(nat)) / abs(nat)
+    return out
 
 
 def _steady(run) -> dict:
@@ -122,6 +188,7 @@ def numbers(runs: dict) -> dict:
     acc = runs["accelerate"]
     return {
         "fig10": fig10,
+        "fig9": fig9_numbers(runs),
         "timings_natural": {k: nat[k] for k in timing_keys},
         "hip_excursion_m": {k: {"steady": v[len(v) // 2], "min": min(v), "max": max(v)} for k, v in excursions.items()},
         "modes": modes,
@@ -136,6 +203,39 @@ def numbers(runs: dict) -> dict:
 
 def _f(value, digits=3) -> str:
     return "–" if value is None or (isinstance(value, float) and not math.isfinite(value)) else f"{value:.{digits}f}"
+
+
+def fig9_readme(f9: dict) -> list[str]:
+    """README.md's section of figure 9: the two walks' swing hip, peak hip torque and parameters."""
+    nat, acc = f9["natural"], f9["accentuated"]
+    lines = [
+        "## Figure 9: pelvic list at toe-off",
+        "",
+        f"![figure 9]({FIG9_FILE})",
+        "",
+        f"The natural walk ({FIG9['steps']} steps at 5 km/h) with a natural and an accentuated pelvic list, "
+        f"the rest default; step {nat['step']} at its toe-off, and the swing hip torque F_θ3 over that step's swing. "
+        "The list lowers the swing leg's hip about the stance hip (§4.2); the paper: it \"might 'force' the dynamic "
+        "leg to increase its hip torque to avoid stubbing its toe\" (§2.4).",
+        "",
+        "| walk | pelvic_list (deg) | swing hip's lowest point below the stance hip (m) | at (s after toe-off) | "
+        "peak F_θ3 over the swing (N m) | at (s after toe-off) | in |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    walks = (("natural", nat), ("accentuated", acc))
+    lines += [f"| {key} | {r['pelvic_list_deg']:g} | {_f(-r['swing_hip_low_m'], 4)} | {_f(r['swing_hip_low_at_s'])} | "
+              f"{_f(r['peak_F_theta3_Nm'], 1)} | {_f(r['peak_at_s'])} | {r['peak_subphase']} |" for key, r in walks]
+    names = [(sub, p, nat["parameters"][sub][p]["unit"]) for sub in ("swing1", "swing2", "swing3")
+             for p in nat["parameters"][sub]]
+    lines += ["", f"The accentuated list changes the peak swing hip torque by {f9['peak_change_Nm']:+.1f} N m "
+              f"({f9['peak_change_pct']:+.1f} % in magnitude). The swings' torque parameters (§4.3) of step "
+              f"{nat['step']}:", "", "| subphase | parameter | natural | accentuated |", "|---|---|---|---|"]
+    lines += [f"| {sub} | {p} ({unit}) | {_f(nat['parameters'][sub][p]['value'], 3)} | "
+              f"{_f(acc['parameters'][sub][p]['value'], 3)} |" for sub, p, unit in names]
+    lifted = [key for key, r in walks if r["parameters"]["swing2"]["hip_actuator"]["value"]]
+    lines += ["", f"swing2's hip_actuator is its recovery (§4.3), which lifts the foot clear of the ground: it acted "
+              f"in {' and '.join(lifted) or 'neither walk'}.", ""]
+    return lines
 
 
 def readme(n: dict, comparison_text: str) -> str:
@@ -171,6 +271,9 @@ def readme(n: dict, comparison_text: str) -> str:
         f"the last one closing the walk at rest); 5 km/h for 3 cycles: {n['fig8']['fig8_5kmh']['steps']} steps "
         f"({n['fig8']['fig8_5kmh']['duration_s']:.2f} s). Each starts standing on both feet and ends standing.",
         "",
+    ]
+    lines += fig9_readme(n["fig9"])
+    lines += [
         "## Phase timings of the natural walk (eq. 2, §4.2, §4.3)",
         "",
         "| quantity | ours (s) | the paper's rule |",
@@ -276,6 +379,7 @@ def reproduce(configs_dir="configs", out_dir="results/paper", progress: bool = F
     files = {
         "fig8": ("fig8.png", png_bytes(fig8_figure(runs["fig8_2kmh"], runs["fig8_5kmh"]))),
         "fig10": ("fig10.png", png_bytes(fig10_figure([runs["natural"], runs["short"], runs["long"]], PAPER))),
+        "fig9": fig9_file(runs),
         "acceleration": ("acceleration.png", png_bytes(acceleration_figure(runs["accelerate"]))),
         "comparison": (COMPARISON_PNG, png_bytes(comparison_figure(modes))),
         "comparison_csv": (COMPARISON_CSV, comparison_csv(comparison_rows(modes)).encode("utf-8")),

@@ -9,7 +9,10 @@ The table has one row per time sample, in walk time (s from the first heel strik
   state rides along, see control/swing_law.py). In swing1 theta4d is the kinematic knee rate; in
   swing3 the knee is locked (theta4 = theta4d = 0).
 
-hip_x/hip_y are world coordinates (m), x forward from the first stance ankle, y up from the ground.
+hip_x/hip_y are world coordinates (m), x forward from the first stance ankle, y up from the ground:
+the stance model's hip, the stance leg's (at each heel strike it passes to the landing leg's hip,
+l0 sin(pelvic rotation) ahead). swing_hip_x/swing_hip_y are the pelvis's other hip
+(:mod:`klaw_ocp.kinematics.pelvis`), from which the hind leg and then the swing leg hang.
 ``hip_y_ref`` is the vertical sinusoid the stance is guided towards at that instant (§4.2, world y):
 lowest at the two heel strikes, a raised-cosine bump of the step's excursion in between.
 
@@ -33,7 +36,7 @@ from .gait.plan import stance_leg
 from .kinematics.leg_geometry import leg_fk
 
 COLUMNS = ("t", "step", "subphase", "w", "theta1", "theta2", "theta3", "theta4", "wd", "theta1d", "theta2d",
-           "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
+           "theta3d", "theta4d", "hip_x", "hip_y", "hip_y_ref", "swing_hip_x", "swing_hip_y", "F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 
 
 def hip_offsets(walk) -> list:
@@ -95,7 +98,10 @@ def _step_columns(step, hips: list) -> dict:
     joined = lambda i: np.concatenate([p[i] for p in parts])
     x, f, hip = joined(2), joined(3), joined(4)
     t = step.t_start + joined(1)
+    # the pelvis's other hip, from which the hind leg and then the swing leg hang (§4.2)
+    (dx, dy), _, _ = step.pelvis.swing_hip_offset(joined(1))
     columns = {"t": t, "step": np.full(len(t), float(step.index)),
+               "swing_hip_x": hip[:, 0] + dx, "swing_hip_y": hip[:, 1] + dy,
                "w": x[:, 0], "theta1": x[:, 1], "theta2": x[:, 2], "wd": x[:, 3], "theta1d": x[:, 4],
                "theta2d": x[:, 5], "hip_x": hip[:, 0], "hip_y": hip[:, 1],
                "F_w": f[:, 0], "F_theta1": f[:, 1], "F_theta2": f[:, 2], "pa": f[:, 3]}
@@ -210,6 +216,9 @@ def _swing_leg(body, step, hips, names):
         hips = stance_hips(body, x[:, :6], np.array([step.origin_x, body.l9]))[0]
     else:
         hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
+    # the swing leg hangs from the pelvis's other hip (kinematics/pelvis.py), as it was solved
+    (dx, dy), _, _ = step.pelvis.swing_hip_offset(t)
+    hips = hips + np.column_stack([dx, dy])
     shank, _, ankle = leg_fk(body, hips, x[:, 6], theta4)
     return t, hips, ankle, shank
 

@@ -351,7 +351,11 @@ def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInpu
     if next_plan is None:
         return None
     b, con = spec.body, plan.constraints
-    x_post = heel_strike_map(b, result.final_stance_state, np.array([con.step_length, 0.0]))
+    # the new stance starts from the landing leg's own hip, the pelvis's other one (§4.2): the
+    # one-hip stance model's hip passes from one hip of the pelvis to the other, whose velocities
+    # agree there (the pelvis turns with zero rate at heel strike)
+    x_post = heel_strike_map(b, result.final_stance_state, np.array([con.step_length, 0.0]),
+                             hip_shift=np.array([con.hip_shift, 0.0]))
     y_start = con.hip_y - b.l9
     y_end = next_plan.constraints.hip_y - b.l9
     excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)

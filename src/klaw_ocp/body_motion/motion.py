@@ -8,8 +8,9 @@
 - The planar model in 3D: the pelvis centre weaves sideways (the determinant "lateral
   displacement", :func:`.upper_body.lateral_displacement`), each foot walks along its own ground
   line, and each leg moves in the plane through its ground line and its hip (:class:`LegPlanes`).
-- Pelvis: level and square for now (tilt, list and rotation 0), but carried through every step
-  below as angles, so that the determinants of the pelvis can turn it without a rewrite.
+- Pelvis (§4.2, the determinants): rotation and list about the stance hip, each step's
+  :class:`klaw_ocp.kinematics.pelvis.PelvisSchedule` (the one its swing was solved with), no tilt;
+  the stance leg hangs from the simulated hip, the other leg from the pelvis's other hip.
 - Upper body (principle 3): :func:`.upper_body.upper_body_motion` from the dynamics' θ2 and the
   legs' hip flexion.
 
@@ -199,6 +200,21 @@ def toe_off_feet(walk, hips_at) -> tuple[np.ndarray, np.ndarray]:
     return legs.ankle + _overreach_pull(legs), legs.pitch
 
 
+def pelvis_angles_at(walk, t: np.ndarray) -> np.ndarray:
+    """The pelvis's tilt, list and rotation (n, 3) (rad, docs/skeleton.md's signs: list + right hip
+    up, rotation + right hip forward) at walk times ``t``: each step's schedule, whose rotation
+    puts the stance side's hip forward and whose list lowers the swing side."""
+    t = np.asarray(t, float)
+    step, tau = locate_steps(walk.steps, t)
+    out = np.zeros((len(t), 3))
+    for k in np.unique(step):
+        rows = step == k
+        rotation, lowered = walk.steps[k].pelvis.angles(tau[rows])
+        sign = 1.0 if stance_leg(int(k)) == "right" else -1.0
+        out[rows, 1], out[rows, 2] = sign * lowered, sign * rotation
+    return out
+
+
 def swing_hips(walk, pelvis_at, pieces: WalkPieces | None = None):
     """``hips_at(step, tau)`` for :func:`.swing_legs.swing_legs`: the simulated hip and the swinging
     leg's own hip in its plane, (n, 2) each, at samples of steps ``step`` and times ``tau``, with
@@ -210,8 +226,21 @@ def swing_hips(walk, pelvis_at, pieces: WalkPieces | None = None):
         planes, _, _, simulated = leg_planes(walk, samples, pelvis_at(samples.t), pieces)
         swinging_left = pieces.stance_right[step][:, None]
         own = np.where(swinging_left, planes.hip_in_plane("left"), planes.hip_in_plane("right"))
-        return simulated, own
+        return model_swing_hips(walk, step, tau, simulated), own
     return hips_at
+
+
+def model_swing_hips(walk, step: np.ndarray, tau: np.ndarray, simulated: np.ndarray) -> np.ndarray:
+    """The planar model's swing hip (n, 2) at samples of steps ``step`` and times ``tau``: the
+    simulated (stance) hip ``simulated`` plus the step's pelvis offset to its other hip, the hip
+    the swing was solved from."""
+    out = np.array(simulated, float)
+    for k in np.unique(step):
+        rows = step == k
+        (dx, dy), _, _ = walk.steps[k].pelvis.swing_hip_offset(tau[rows])
+        out[rows, 0] += dx
+        out[rows, 1] += dy
+    return out
 
 
 def _stance_times(foot, tau: np.ndarray) -> np.ndarray:
@@ -228,8 +257,7 @@ def body_motion(walk, fps: float) -> BodyMotion:
         raise ValueError("walk: no completed step, so no body motion")
     body, attrs = walk.spec.body, walk.spec.attributes
     samples = Samples.of(walk, fps)
-    # level and square for now: the pelvis's determinants (rotation, list) will set these
-    pelvis_at = lambda t: np.zeros((len(t), 3))
+    pelvis_at = lambda t: pelvis_angles_at(walk, t)
     pelvis_angles = pelvis_at(samples.t)
     pieces = WalkPieces.of(walk)
     planes, centre, lean, simulated = leg_planes(walk, samples, pelvis_angles, pieces)
@@ -240,8 +268,9 @@ def body_motion(walk, fps: float) -> BodyMotion:
     rows = np.concatenate(list(swinging.values()))
     hips_at = swing_hips(walk, pelvis_at, pieces)
     own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
+    model_hips = model_swing_hips(walk, samples.step[rows], samples.tau[rows], simulated[rows])
     swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_feet(walk, hips_at),
-                       hips=(simulated[rows], own))
+                       hips=(model_hips, own))
     frames, start, legs = slice(None), 0, {}
     for side, r in swinging.items():
         for name in _POINTS:

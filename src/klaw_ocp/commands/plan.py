@@ -91,7 +91,8 @@ def _format_single(body: Body, plan: StepPlan) -> str:
         ("w (stance leg)", f"{c.w:.4f}", f"m  (l1 = {body.l1:.4f} m)"),
         ("theta1 (stance leg)", f"{c.theta1:.4f}", f"rad  ({deg(c.theta1):.2f} deg)"),
         ("theta3 (swing thigh)", f"{c.theta3:.4f}", f"rad  ({deg(c.theta3):.2f} deg)"),
-        ("hip", f"({c.hip_x:.4f}, {c.hip_y:.4f})", "m"),
+        ("hip", f"({c.hip_x:.4f}, {c.hip_y:.4f})", "m  (the stance leg's)"),
+        ("landing hip ahead by", f"{c.hip_shift:.4f}", "m  (l0 sin(pelvic_rotation): the pelvis's other hip)"),
         ("stance ankle (origin)", f"({c.ankle_x:.4f}, {c.ankle_y:.4f})", "m"),
         ("landing heel x", f"{c.heel_x:.4f}", "m"),
     ]

@@ -1,4 +1,4 @@
-"""``klaw-ocp reproduce``: the paper's figures 8 and 10, the acceleration, the solver modes
+"""``klaw-ocp reproduce``: the paper's figures 8, 9 and 10, the acceleration, the solver modes
 compared and the paper's numbers beside ours, into results/paper/ (:mod:`klaw_ocp.reproduce`)."""
 from __future__ import annotations
 
@@ -8,13 +8,14 @@ import time
 from . import EXIT_OK
 from .run import add_force_option, keeping, report_unfinished
 
-HELP = "regenerate results/paper/: the paper's figures 8 and 10 and its numbers beside ours"
+HELP = "regenerate results/paper/: the paper's figures 8, 9 and 10 and its numbers beside ours"
 
 
 def configure(p: argparse.ArgumentParser) -> None:
     p.description = ("Walk the shipped configs of the paper's figures (start_stop_2kmh, start_stop_5kmh, "
                      "natural_walk, short_steps, long_steps, accelerate; the natural walk in both solver "
-                     "modes) and write fig8.png, fig10.png, acceleration.png, comparison.png/.csv, the "
+                     "modes, and 8 steps of it with pelvic_list 5 and 12 deg) and write fig8.png, "
+                     "figure9_pelvic_list.png, fig10.png, acceleration.png, comparison.png/.csv, the "
                      "natural walk's hip height and gait diagram, numbers.json and README.md (our numbers "
                      "beside the paper's) to --out. Every config is checked before the first walk.")
     p.epilog = "example: klaw-ocp reproduce --out results/paper"

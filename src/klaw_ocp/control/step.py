@@ -19,6 +19,7 @@ from ..dynamics import knee_lock_map, stance_hips
 from ..dynamics.evaluate import evaluate
 from ..errors import ConvergenceError
 from ..gait import StepPlan
+from ..kinematics.pelvis import PelvisSchedule
 from ..kinematics.swing_foot import SwingFoot
 from ..kinematics.virtual_leg import StanceFoot
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
@@ -28,6 +29,7 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .step_stages import (DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
+                          step_pelvis, swing_side_hips,
                           swing_context)
 from .swing_spec import swing_specs
 
@@ -110,6 +112,8 @@ class StepResult:
     stance_hips: np.ndarray
     #: the swing foot's angle schedule, step-local times
     swing_foot: SwingFoot
+    #: the pelvis's rotation and list about the stance hip (§4.2), which carry the swing leg's hip
+    pelvis: PelvisSchedule
 
     def subphase(self, name: str) -> SubphaseSolution:
         return next(s for s in self.subphases if s.name == name)
@@ -222,7 +226,8 @@ class StepController:
     # -- the whole step ------------------------------------------------------------------------
     def solve_step(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StepResult:
         """One step in its stages: the stance (solved), the stance leg's own virtual-leg rules, the
-        hind leg's double support to toe-off, curve P and the swing foot, the swing context, the
+        pelvis (its other hip, from which the hind leg and the swing hang), the hind leg's double
+        support to toe-off, curve P and the swing foot, the swing context, the
         three swings (solved), the heel's clearance before it strikes."""
         b, t = self.body, plan.timings
         stance = self.solve_stance(plan, inp, index, at_rest)
@@ -231,10 +236,12 @@ class StepController:
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
         stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing,
                                        inp.next_t_ds)
-        ds = hind_leg_double_support(self.attrs, plan, stance, hips, hip_vels, inp.hind_foot)
+        pelvis = step_pelvis(b, self.attrs, plan, inp.stance_standing)
+        other_hips, other_vels = swing_side_hips(pelvis, stance.t, hips, hip_vels)
+        ds = hind_leg_double_support(self.attrs, plan, stance, other_hips, other_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
-        curve = plan_curve_p(b, self.attrs, plan, ds, hips[node_at(stance.t, t1)])
-        c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve)
+        curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_at(stance.t, t1)])
+        c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
         x_to = stance.states[node_at(stance.t, t.t_ds)]
         swings = self.solve_swings(plan, index, x_to, ds, c, stance.events if not at_rest else None,
                                    stance.t[node_at(stance.t, t.t_ds)])
@@ -248,7 +255,7 @@ class StepController:
                                          "excursion": inp.excursion, "rise": stance_ctx["hip_rise"],
                                          "fall": stance_ctx["hip_fall"], "power": stance_ctx["hip_fall_power"]},
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
-                          stance_hips=hips, swing_foot=curve.swing_foot)
+                          stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
                      stance_events, t_toe_off: float) -> list[SubphaseSolution]:

@@ -1,15 +1,19 @@
 """The kinematic stages of a step between its stance and its swings (sections 4.2, 4.3), each a
 plain function of what the stage before it handed on:
 
-0. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
-   its heel-strike foot and its heel-off; the next step's double support completes them (stage 1
+0. :func:`step_pelvis` and :func:`swing_side_hips`: the pelvis's rotation and list about the
+   stance hip (§4.2, the determinants), which put the swing leg's hip, the pelvis's other hip,
+   where the hind leg's double support, curve P and the swing models take it from
+   (:mod:`klaw_ocp.kinematics.pelvis`: the kinematics reaching back into the dynamics);
+1. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
+   its heel-strike foot and its heel-off; the next step's double support completes them (stage 2
    of that step);
-1. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
+2. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
    to toe-off, where swing1 starts from its posture ("the continuing stance phase of the hind leg
    is completed kinematically", §3);
-2. :func:`plan_curve_p`: curve P, the ankle path of swing1, from the toe-off ankle to the ankle
+3. :func:`plan_curve_p`: curve P, the ankle path of swing1, from the toe-off ankle to the ankle
    with the toe under the knee at t1, and the swing foot's angle schedule;
-3. :func:`swing_context`: the numbers the swing models read (the stance context, the solved stance
+4. :func:`swing_context`: the numbers the swing models read (the stance context, the solved stance
    parameters, the foot schedule, curve P, the holding gains and the subphase times).
 
 :class:`klaw_ocp.control.step.StepController` runs them in this order between the stance solve and
@@ -25,6 +29,7 @@ import numpy as np
 from ..body import Body
 from ..dynamics import stance_hip
 from ..kinematics.leg_geometry import reach_for_knee_flexion
+from ..kinematics.pelvis import PelvisSchedule
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
@@ -110,6 +115,24 @@ def node_at(t_nodes: np.ndarray, time: float) -> int:
     return int(np.argmin(np.abs(t_nodes - time)))
 
 
+def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool) -> PelvisSchedule:
+    """The pelvis of a step (§4.2): its list at mid-step is the attribute's; its rotation at this
+    step's heel strike the attribute's (none where the walk starts from rest, the feet side by
+    side), at the next heel strike the one eq. 3 split the step by (the plan's ``hip_shift``:
+    none at a closing step's end)."""
+    return PelvisSchedule(width=body.l0, rotation_start=0.0 if starts_at_rest else attrs.rad("pelvic_rotation"),
+                          rotation_end=math.asin(plan.constraints.hip_shift / body.l0),
+                          list_peak=attrs.rad("pelvic_list"), t_step=plan.timings.t_step)
+
+
+def swing_side_hips(pelvis: PelvisSchedule, t: np.ndarray, hips: np.ndarray,
+                    hip_vels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pelvis's other hip (the hind leg's through the double support, then the swing leg's) and
+    its velocity at step times ``t``, from the stance hips and their velocities there (n, 2)."""
+    (dx, dy), (vx, vy), _ = pelvis.swing_hip_offset(np.asarray(t, float))
+    return hips + np.column_stack([dx, dy]), hip_vels + np.column_stack([vx, vy])
+
+
 def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
                      standing: bool = False, next_t_ds: float | None = None) -> StanceFoot:
     """The virtual leg's rules for the stance leg of a step (§4.2), from its solved ``stance`` and
@@ -189,7 +212,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray)
 
 
 def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_parameters: dict,
-                  origin: np.ndarray, curve: CurveP) -> np.ndarray:
+                  origin: np.ndarray, curve: CurveP, pelvis: PelvisSchedule) -> np.ndarray:
     """The swing models' context vector (:data:`klaw_ocp.control.swing_law.SWING_CONTEXT`): they
     re-simulate the stance (its context and solved parameters) and read curve P, the foot's
     schedule, the holding gains and the subphase times from it."""
@@ -202,6 +225,8 @@ def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_p
                **{key: getattr(curve.swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)},
                k_h=gains.k_h, d_h=gains.d_h, theta3_target=con.theta3,
                tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
-               swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1),
+               swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1), pelvis_width=pelvis.width,
+               pelvis_rotation_start=pelvis.rotation_start, pelvis_rotation_end=pelvis.rotation_end,
+               pelvis_list=pelvis.list_peak,
                **{f"P{i}": curve.coefficients[i] for i in range(5)})
     return SWING_CONTEXT.pack(ctx)

@@ -1,6 +1,8 @@
 """The closed-loop swing dynamics of section 4.3, one right-hand side per subphase.
 
-The swing leg hangs from the hip of the stance model of the same step (assumption 4). Rather than
+The swing leg hangs from the pelvis's other hip (§4.2): the hip of the stance model of the same
+step (assumption 4) plus the pelvis's offset (:func:`klaw_ocp.kinematics.pelvis.swing_hip_offset`,
+its rotation and list, with their rates and accelerations). Rather than
 interpolating a sampled hip trajectory, every swing state carries the stance state along and
 integrates the stance model with its solved parameters: the hip acceleration fed to the swing
 model is then exact, and identical in both solver modes.
@@ -27,6 +29,7 @@ import casadi as ca
 from ..dynamics.points import foot_points_sx
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from ..dynamics.swing import swing_accelerations_sx, swing_points
+from ..kinematics.pelvis import swing_hip_offset
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .layout import VectorLayout
 from .stance_law import STANCE_CONTEXT, STANCE_PARAMETERS, body_vector, stance_forces
@@ -42,7 +45,8 @@ SWING_CONTEXT = VectorLayout(
     ["origin_x", "origin_y", "l8", "l9", "l12", "l13",
      "toe_off_time", "swing_end_time", *FOOT_CONTEXT,
      "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
-     "swing2_start", "tau4"],
+     "swing2_start", "tau4", "pelvis_width", "pelvis_rotation_start", "pelvis_rotation_end",
+     "pelvis_list"],
 )
 SWING_FORCES = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 SWING1_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta4", "theta3d")
@@ -55,15 +59,18 @@ def names(c):
 
 
 def stance_part(xs, t, c):
-    """Stance rates, its forces, and the hip's world position, velocity and acceleration."""
+    """Stance rates, its forces, and the swing hip's world position, velocity and acceleration:
+    the stance hip's, plus the pelvis's offset to its other hip."""
     n = names(c)
     first = SWING_CONTEXT.index[STANCE_PARAMETERS_IN_SWING[0]]
     p_stance = c[first: first + len(STANCE_PARAMETERS)]
     force, pa = stance_forces(xs, t, p_stance, c[: len(STANCE_CONTEXT)])
     qdd = stance_accelerations_sx(xs[0:3], xs[3:6], force, body_vector(c), n.locked)
     pos, vel, acc = hip_kinematics_sx(xs[0:3], xs[3:6], qdd)
-    hip = pos + ca.vertcat(n.origin_x, n.origin_y)
-    return ca.vertcat(xs[3:6], qdd), ca.vertcat(force, pa), hip, vel, acc
+    (dx, dy), (vx, vy), (ax, ay) = swing_hip_offset(n.pelvis_width, n.pelvis_rotation_start, n.pelvis_rotation_end,
+                                                    n.pelvis_list, n.swing_end_time, t, ca)
+    hip = pos + ca.vertcat(n.origin_x + dx, n.origin_y + dy)
+    return ca.vertcat(xs[3:6], qdd), ca.vertcat(force, pa), hip, vel + ca.vertcat(vx, vy), acc + ca.vertcat(ax, ay)
 
 
 def foot_angles(t, c):

@@ -130,16 +130,20 @@ def impact_functions() -> dict:
 
 # ---- numeric API -----------------------------------------------------------------------------
 
-def heel_strike_map(body, x_pre, new_ankle_offset) -> np.ndarray:
+def heel_strike_map(body, x_pre, new_ankle_offset, hip_shift=(0.0, 0.0)) -> np.ndarray:
     """New stance state ``[w, theta1, theta2, wd, theta1d, theta2d]`` relative to the new ankle.
 
     ``x_pre`` is the stance state just before heel strike, relative to the old ankle;
-    ``new_ankle_offset = (dx, dy)`` is the new ankle minus the old one (m). ``body`` is not needed
-    by this rule (it is purely kinematic) and is taken for symmetry with the other maps.
+    ``new_ankle_offset = (dx, dy)`` is the new ankle minus the old one (m). ``hip_shift`` (m) is
+    where the new stance leg's hip is relative to the old one's: (0, 0) for the one-hip model; with
+    a pelvis (:mod:`klaw_ocp.kinematics.pelvis`) the landing leg's hip, ahead by its rotation. The
+    hip's velocity and the upper body's angle and rate carry over unchanged either way. ``body``
+    is not needed by this rule (it is purely kinematic) and is taken for symmetry with the other
+    maps.
     """
     check_body(body)
     x = as_vector("x_pre", x_pre, 6)
-    offset = as_vector("new_ankle_offset", new_ankle_offset, 2)
+    offset = as_vector("new_ankle_offset", new_ankle_offset, 2) - as_vector("hip_shift", hip_shift, 2)
     if x[0] <= 0:
         raise ConfigError(out_of_range("x_pre[0] (w)", x[0], "a positive leg length in m"))
     post, = evaluate(impact_functions()["heel_strike"], x, offset)

@@ -7,7 +7,8 @@ The dynamic model (§2.3, figure 2) in world coordinates (x forward, y up, m), f
 
 - stance leg, a telescope from its ankle (``origin_x_m``, l9) to the hip (``hip_x``, ``hip_y``),
   = ankle + w·(sin θ1, cos θ1);
-- swing (in double support: hind) leg, two segments: knee = hip − l3·(sin θ3, cos θ3), ankle =
+- swing (in double support: hind) leg, from the stance hip across the pelvis to its own hip
+  (``swing_hip_x``, ``swing_hip_y``), then two segments: knee = swing hip − l3·(sin θ3, cos θ3), ankle =
   knee − l4·(sin(θ3 + θ4), cos(θ3 + θ4));
 - upper body, from the hip along (sin θ2, cos θ2), length l2.
 
@@ -41,7 +42,8 @@ _BOLD = {"lw": 1.8, "alpha": 1.0}
 
 
 def pose_points(run, rows) -> dict:
-    """The model's points at table rows ``rows`` (index array): ``hip``, ``stance_ankle``,
+    """The model's points at table rows ``rows`` (index array): ``hip`` (the stance leg's),
+    ``swing_hip`` (the pelvis's other hip, the swing leg's), ``stance_ankle``,
     ``knee``, ``swing_ankle``, ``head`` (end of the upper body), each (n, 2) in m, and
     ``stance_leg`` / ``swing_leg`` (n,) leg names and ``step`` (n,)."""
     rows = np.asarray(rows, dtype=int)
@@ -50,10 +52,13 @@ def pose_points(run, rows) -> dict:
     origin = np.array([s["origin_x_m"] for s in steps])[step]
     stance_leg = np.array([s["stance_leg"] for s in steps])[step]
     hip = np.column_stack([table["hip_x"][rows], table["hip_y"][rows]])
+    # the swing leg hangs from the pelvis's other hip (a run folder from before the pelvis has none)
+    swing_hip = (np.column_stack([table["swing_hip_x"][rows], table["swing_hip_y"][rows]])
+                 if "swing_hip_x" in table else hip)
     th2, th3 = table["theta2"][rows], table["theta3"][rows]
     phi = th3 + table["theta4"][rows]
-    knee = hip - body["l3"] * np.column_stack([np.sin(th3), np.cos(th3)])
-    return {"hip": hip, "stance_ankle": np.column_stack([origin, np.full(len(rows), body["l9"])]),
+    knee = swing_hip - body["l3"] * np.column_stack([np.sin(th3), np.cos(th3)])
+    return {"hip": hip, "swing_hip": swing_hip, "stance_ankle": np.column_stack([origin, np.full(len(rows), body["l9"])]),
             "knee": knee, "swing_ankle": knee - body["l4"] * np.column_stack([np.sin(phi), np.cos(phi)]),
             "head": hip + body["l2"] * np.column_stack([np.sin(th2), np.cos(th2)]),
             "stance_leg": stance_leg, "swing_leg": np.where(stance_leg == "right", "left", "right"), "step": step}
@@ -93,7 +98,7 @@ def strobe_rows(run, every: int | None = None, t_range=None) -> tuple[np.ndarray
 def _segments(points: dict, legs, upper_body: bool) -> dict:
     """colour key (a leg, or "trunk") -> array of polylines (n, k, 2) for one LineCollection."""
     stance_lines = np.stack([points["stance_ankle"], points["hip"]], axis=1)
-    swing_lines = np.stack([points["hip"], points["knee"], points["swing_ankle"]], axis=1)
+    swing_lines = np.stack([points["hip"], points["swing_hip"], points["knee"], points["swing_ankle"]], axis=1)
     out = {}
     for leg in legs:
         out[leg] = list(stance_lines[points["stance_leg"] == leg]) + list(swing_lines[points["swing_leg"] == leg])
@@ -170,7 +175,7 @@ def draw_posture(ax, run, t: float, legs=("right", "left"), upper_body: bool = T
     row = sample_at(run, t)
     p = pose_points(run, [row])
     shift = 0.0 if origin_at is None else origin_at - float(p["stance_ankle"][0, 0])
-    pts = {k: p[k][0] + np.array([shift, 0.0]) for k in ("hip", "stance_ankle", "knee", "swing_ankle", "head")}
+    pts = {k: p[k][0] + np.array([shift, 0.0]) for k in ("hip", "swing_hip", "stance_ankle", "knee", "swing_ankle", "head")}
     stance, swing = str(p["stance_leg"][0]), str(p["swing_leg"][0])
     if upper_body:
         ax.plot(*np.stack([pts["hip"], pts["head"]]).T, color=TRUNK_COLOUR, lw=lw, solid_capstyle="round", zorder=3)
@@ -178,7 +183,7 @@ def draw_posture(ax, run, t: float, legs=("right", "left"), upper_body: bool = T
         ax.plot(*np.stack([pts["stance_ankle"], pts["hip"]]).T, color=colours[stance], lw=lw,
                 solid_capstyle="round", zorder=4)
     if swing in legs:
-        ax.plot(*np.stack([pts["hip"], pts["knee"], pts["swing_ankle"]]).T, color=colours[swing], lw=lw,
+        ax.plot(*np.stack([pts["hip"], pts["swing_hip"], pts["knee"], pts["swing_ankle"]]).T, color=colours[swing], lw=lw,
                 solid_capstyle="round", zorder=4)
     if joints:
         names = ["hip"] + (["stance_ankle"] if stance in legs else []) + (["knee", "swing_ankle"] if swing in legs else [])

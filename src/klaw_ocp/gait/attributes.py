@@ -171,9 +171,14 @@ _SPECS = [
           "§4.2: the hip 'prescribes a vertical sinusoidal curve'; minimum excursion, " + _OURS),
     # -- determinants of gait and upper body (section 4.2, 2.4 principle 3)
     _spec("determinants", "pelvic_rotation", "deg", 4.0, 0.0, 20.0,
-          "§4.2: pelvic rotation (transverse plane), maximum at heel strike; value " + _OURS),
+          "§4.2: pelvic rotation (transverse plane) about the stance hip, each way, largest at heel "
+          "strike (the landing leg's hip l0 sin of it ahead), 0 at mid-step; it carries the swing "
+          "leg's hip and splits the step in eq. 3 (people at 5 km/h: about 4-5 deg each way, Kadaba "
+          "et al. 1990, Perry & Burnfield; docs/human-gait.md); value " + _OURS),
     _spec("determinants", "pelvic_list", "deg", 5.0, 0.0, 20.0,
-          "§4.2, fig. 9: pelvic list (coronal plane), maximum at mid-step; value " + _OURS),
+          "§4.2, fig. 9: pelvic list (coronal plane) about the stance hip, the swing side down, "
+          "largest at mid-step, 0 at heel strike; it lowers the swing leg's hip (people: about 4-5 "
+          "deg, Kadaba et al. 1990's obliquity, Perry & Burnfield); value " + _OURS),
     _spec("determinants", "pelvic_lateral_shift", "m", 0.02, 0.0, 0.1,
           "§4.2: lateral displacement, 'a maximum shortly after toe-off'; value " + _OURS),
     _spec("determinants", "foot_lateral_distance", "m", 0.08, 0.0, 0.4,
@@ -187,7 +192,7 @@ ATTRIBUTES: Mapping[str, AttributeSpec] = MappingProxyType({s.name: s for s in _
 
 #: Registered and validated, but nothing in the package reads them yet, so they do not change a
 #: walk (the pelvis issue will make them act). Remove a name when it acts.
-NOT_USED_YET = frozenset({"pelvic_rotation", "pelvic_list"})
+NOT_USED_YET: frozenset = frozenset()
 
 # Pairs (lower, upper) that must stay strictly ordered whatever the overrides.
 _ORDERED_PAIRS = (("sf_min", "sf_max"), ("speed_min", "speed_max"),

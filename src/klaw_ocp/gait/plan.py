@@ -23,6 +23,7 @@ Schedule semantics (our reading of section 5; see docs/paper-map.md):
 """
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -236,7 +237,7 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
             p = _start_ramp(i, p, body, attrs)
         timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
         check_step_length(body, p, i)
-        constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x)
+        constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x, hip_shift=landing_hip_shift(body, attrs))
         plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))
         t += timings.t_step
         x = constraints.next_ankle_x
@@ -252,6 +253,12 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
                                        f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
     check_step_changes(body, [p.parameters for p in plans], attrs)
     return plans
+
+
+def landing_hip_shift(body: Body, attrs) -> float:
+    """How far the landing leg's hip is ahead of the stance hip at heel strike (m): the pelvis's
+    width turned by the pelvic rotation (§4.2; :mod:`klaw_ocp.kinematics.pelvis`)."""
+    return body.l0 * math.sin(attrs.rad("pelvic_rotation"))
 
 
 def closing_step(body: Body, attributes, last: StepPlan) -> StepPlan:

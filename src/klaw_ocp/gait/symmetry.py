@@ -20,6 +20,14 @@ reading gives w < l1 at heel strike, against the text's w > l1. The cosine law g
     θ1 = asin(sl / (2w))                              (stance leg, > 0: hip ahead of the ankle)
     θ3 = -ω3 - asin((x_nh - x_h) / r)                 (swing thigh, < 0: foot ahead of the hip)
 
+With a pelvis (§4.2, the determinants; :mod:`klaw_ocp.kinematics.pelvis`) the landing leg hangs
+from the pelvis's other hip, ``hip_shift`` = l0 sin ψ ahead of the stance hip at heel strike
+(pelvic rotation ψ, list 0 there). The symmetric step then gives each leg (sl - hip_shift)/2 of
+the step: the stance hip is at x_a + (sl - hip_shift)/2 and the landing hip, from which θ3 is
+measured, hip_shift ahead of it, at the same height. Pelvic rotation so lengthens the step
+without lowering the hip (Saunders' first determinant of gait); hip_shift = 0 is the paper's
+one-hip step.
+
 Signs follow the errata's conventions (stance hip = ankle + w·(sin θ1, cos θ1); swing ankle =
 hip - l1·(sin θ3, cos θ3) for a straight leg). For a compass gait without feet θ3 = -θ1 (ERRATA
 6); the foot makes |θ3| < θ1.
@@ -57,6 +65,8 @@ class StepConstraints:
         heel_x: x of the landing heel (on the ground).
         next_ankle_x: the next stance origin, x_a + sl (flat-foot ankle of the new stance leg).
         theta5: ankle angle at impact used, rad.
+        hip_shift: how far the landing leg's hip (the pelvis's other hip) is ahead of the stance
+            hip at heel strike, m (0: the one-hip model).
     """
 
     step_length: float
@@ -72,6 +82,12 @@ class StepConstraints:
     heel_x: float
     next_ankle_x: float
     theta5: float
+    hip_shift: float = 0.0
+
+    @property
+    def landing_hip_x(self) -> float:
+        """x of the hip the landing leg hangs from at heel strike."""
+        return self.hip_x + self.hip_shift
 
     def as_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -85,7 +101,7 @@ def _finite(field: str, value, allowed: str, positive: bool) -> float:
 
 
 def step_constraints(body: Body, step_length, attributes: LocomotionAttributes | None = None,
-                     ankle_x=0.0, closing: bool = False) -> StepConstraints:
+                     ankle_x=0.0, closing: bool = False, hip_shift: float = 0.0) -> StepConstraints:
     """The heel-strike final conditions (w, θ1, θ3) of a step of length ``step_length`` (eq. 3).
 
     Args:
@@ -93,6 +109,8 @@ def step_constraints(body: Body, step_length, attributes: LocomotionAttributes |
         step_length: sl in m, ankle to ankle.
         attributes: gives ``theta5_impact`` (deg).
         ankle_x: x of the stance origin ankle1 (the previous step's ``next_ankle_x``).
+        hip_shift: the landing leg's hip ahead of the stance hip at heel strike (m, the pelvis's
+            rotation; 0 in a closing step, whose feet end side by side).
 
     Raises:
         ConfigError: sl is not a finite number > 0, or ankle_x is not finite.
@@ -114,22 +132,24 @@ def step_constraints(body: Body, step_length, attributes: LocomotionAttributes |
     # Clamp the rounding of a nearly degenerate triangle; the argument is in [-1, 1] analytically.
     omega3 = math.acos(max(-1.0, min(1.0, (l1 ** 2 + r2 - l11 ** 2) / (2.0 * l1 * r))))
 
+    shift = 0.0 if closing else float(hip_shift)
+    half = 0.5 * (sl - shift)           # each leg's share of the step (the pelvis spans the rest)
     x_nh = x_a + sl - l8
-    x_h = x_a + 0.5 * sl
-    dx = x_nh - x_h
+    x_h = x_a + half
+    dx = x_nh - (x_h + shift)
     dy2 = r2 - dx ** 2
-    sl_max = 2.0 * (math.sqrt(max(0.0, r2 - y_a ** 2)) + l8)  # hip would drop to ankle height
+    sl_max = 2.0 * (math.sqrt(max(0.0, r2 - y_a ** 2)) + l8) + shift  # hip would drop to ankle height
     if dy2 <= 0.0 or math.sqrt(dy2) <= y_a:
         raise GaitLimitError(f"walk.step_length: got {sl:.6g} m, allowed below {sl_max:.4g} m "
                              f"(eq. 3: the landing leg cannot reach the ground with the hip above "
                              f"the stance ankle at theta5_impact = {attrs.theta5_impact:g} deg)")
     y_h = math.sqrt(dy2)
-    w = math.hypot(y_h - y_a, 0.5 * sl)
-    theta1 = math.asin(0.5 * sl / w)
+    w = math.hypot(y_h - y_a, half)
+    theta1 = math.asin(half / w)
     theta3 = -omega3 - math.asin(dx / r)
     return StepConstraints(step_length=sl, w=w, theta1=theta1, theta3=theta3, r=r, omega3=omega3,
                            hip_x=x_h, hip_y=y_h, ankle_x=x_a, ankle_y=y_a, heel_x=x_nh,
-                           next_ankle_x=x_a + sl, theta5=th5)
+                           next_ankle_x=x_a + sl, theta5=th5, hip_shift=shift)
 
 
 def landing_heel(body: Body, c: StepConstraints) -> tuple[float, float]:
@@ -139,7 +159,7 @@ def landing_heel(body: Body, c: StepConstraints) -> tuple[float, float]:
     ankle along the ankle→hip direction rotated counter-clockwise by θ5 + ω8. Used by tests and
     by the swing phase to check that eq. 3 closes.
     """
-    ax = c.hip_x - body.l1 * math.sin(c.theta3)
+    ax = c.landing_hip_x - body.l1 * math.sin(c.theta3)
     ay = c.hip_y - body.l1 * math.cos(c.theta3)
     ux, uy = math.sin(c.theta3), math.cos(c.theta3)  # unit vector ankle -> hip
     a = c.theta5 + body.omega8

@@ -1,0 +1,106 @@
+"""The pelvis's second hip (§4.2, the determinants of gait; §2.4): pelvic rotation and list turn
+the pelvis about the stance hip, the simulated one, and carry the swing leg's hip with them.
+
+"By introducing a pelvis, the kinematics of the determinants basically add a second hip to the
+locomotion model and must therefore be applied after the stance phase simulation but before the
+simulation of the swing leg which uses the new position of this hip." The rotation is largest at
+heel strike and least at mid-step, the list least at heel strike and largest at mid-step (§4.2).
+
+**Timing.** The paper interpolates linearly between the boundary values. The swing leg's equations
+of motion read the hip's acceleration (A.2), and a piecewise-linear angle has a velocity kink
+there, an impulse in the swing model's hip acceleration at mid-step and at heel strike. We
+interpolate with half cosines between the same boundary values instead (docs/paper-map.md): with
+s = t/t_step,
+
+    rotation(s) = ψ0·c(s) − ψ1·(1 − c(s)),   c(s) = (1 + cos πs)/2
+    list(s)     = φ·sin²(πs)
+
+``rotation`` is the stance side's hip forward of the swing side's (ψ0 at this step's heel strike,
+−ψ1 at the next: the swing side forward), ``list`` the swing side down. Both have zero rate at
+heel strike, so the hips' velocities are continuous where the legs trade roles.
+
+**The second hip.** The pelvis is the skeleton's (``Rz(tilt) Rx(list) Ry(rotation)``, hips l0
+apart on its lateral axis; tilt 0), turned about the stance hip, so the swing-side hip is the
+stance hip plus::
+
+    Δx = −l0 sin(rotation),   Δy = −l0 cos(rotation) sin(list)
+
+At heel strike (list 0) the landing leg's hip is l0·sin ψ1 ahead of the stance hip; the next
+stance starts from it (:func:`klaw_ocp.dynamics.heel_strike_state`'s ``hip_shift``), so each hip
+moves continuously while the one-hip stance model's hip passes from one hip of the pelvis to the
+other. Eq. 3 (:func:`klaw_ocp.gait.symmetry.step_constraints`) splits the step length accordingly:
+each leg spans (sl − l0 sin ψ)/2, the first determinant of gait (the pelvis's rotation lengthens
+the step without lowering the hip).
+
+The functions take ``ops`` (numpy, or casadi for the swing models' symbolic hip) so that the body
+(:mod:`klaw_ocp.body_motion`), the step's stages and the swing models use one formula.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class PelvisSchedule:
+    """One step's pelvis: ``width`` l0 (m); ``rotation_start`` ψ0 and ``rotation_end`` ψ1 (rad,
+    at this step's heel strike and at the next; 0 where the walk starts or ends at rest, the feet
+    side by side); ``list_peak`` φ (rad, at mid-step); ``t_step`` (s)."""
+    width: float
+    rotation_start: float
+    rotation_end: float
+    list_peak: float
+    t_step: float
+
+    @property
+    def landing_shift(self) -> float:
+        """How far (m) the landing leg's hip is ahead of the stance hip at the next heel strike."""
+        return self.width * math.sin(self.rotation_end)
+
+    def angles(self, t, ops=np):
+        """(rotation, list) (rad) at step times ``t``: the stance side's hip forward, the swing side down."""
+        return pelvis_angles(self.rotation_start, self.rotation_end, self.list_peak, self.t_step, t, ops)
+
+    def swing_hip_offset(self, t, ops=np):
+        """The swing-side hip minus the stance hip (x, y) and its first and second time derivatives."""
+        return swing_hip_offset(self.width, self.rotation_start, self.rotation_end, self.list_peak,
+                                self.t_step, t, ops)
+
+
+def _phase(t_step, t, ops):
+    """π s and its rate π/t_step."""
+    rate = math.pi / t_step
+    return rate * t, rate
+
+
+def pelvis_angles(rotation_start, rotation_end, list_peak, t_step, t, ops=np):
+    """(rotation, list) (rad) at step times ``t`` (see the module's docstring)."""
+    a, _ = _phase(t_step, t, ops)
+    c = (1 + ops.cos(a)) / 2
+    return (rotation_start + rotation_end) * c - rotation_end, list_peak * ops.sin(a) ** 2
+
+
+def swing_hip_offset(width, rotation_start, rotation_end, list_peak, t_step, t, ops=np):
+    """((Δx, Δy), (Δx', Δy'), (Δx'', Δy'')): the swing-side hip minus the stance hip in the sagittal
+    plane and its time derivatives at step times ``t``."""
+    a, k = _phase(t_step, t, ops)
+    span = rotation_start + rotation_end
+    # rotation r = span (1 + cos a)/2 - rotation_end; list q = phi sin^2 a = phi (1 - cos 2a)/2
+    r = span * (1 + ops.cos(a)) / 2 - rotation_end
+    r1 = -span * k * ops.sin(a) / 2
+    r2 = -span * k * k * ops.cos(a) / 2
+    q = list_peak * ops.sin(a) ** 2
+    q1 = list_peak * k * ops.sin(2 * a)
+    q2 = 2 * list_peak * k * k * ops.cos(2 * a)
+    sr, cr, sq, cq = ops.sin(r), ops.cos(r), ops.sin(q), ops.cos(q)
+    dx = -width * sr
+    dx1 = -width * cr * r1
+    dx2 = width * (sr * r1 * r1 - cr * r2)
+    # dy = -l0 cos r sin q
+    dy = -width * cr * sq
+    dy1 = width * (sr * r1 * sq - cr * cq * q1)
+    dy2 = width * (cr * r1 * r1 * sq + sr * r2 * sq + 2 * sr * r1 * cq * q1
+                   + cr * sq * q1 * q1 - cr * cq * q2)
+    return (dx, dy), (dx1, dy1), (dx2, dy2)
