@@ -100,9 +100,9 @@ def stance_lock_events(nx: int, nu: int, nc: int, lock_rule: str) -> tuple:
         Event("leg_too_long", ca.Function("leg_too_long", args, [x[0] - c[_L1]]), +1,
               lambda x, t, c, mode: (mode.get("lock_events", True) and not mode.get("locked")
                                      and not mode.get("early_lock") and x[1] < 0),
-              _lock(lock_rule)),
+              _lock(lock_rule), rate=lambda states: states[:, 3]),
         Event("leg_vertical", ca.Function("leg_vertical", args, [x[1]]), +1,
-              lambda x, t, c, mode: bool(mode.get("locked")), _unlock),
+              lambda x, t, c, mode: bool(mode.get("locked")), _unlock, rate=lambda states: states[:, 4]),
     )
 
 

@@ -32,12 +32,16 @@ class Event:
 
     ``direction`` +1 fires on an upward crossing, -1 downward. ``guard(x, t, c_dict, mode)`` says
     whether the event is armed; ``apply(x, c, mode) -> (x, c, mode)`` is the switch (a lock map).
+    ``rate(states) -> dg/dt`` at (M, nx) states, when the state holds it (the rate of a position
+    is a velocity of the state): with it a crossing that goes and comes back inside one interval
+    is found too (:mod:`.events`).
     """
     name: str
     fn: ca.Function
     direction: int
     guard: Callable
     apply: Callable
+    rate: Optional[Callable] = None
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,105 @@
+"""Plain shooting's state events between nodes (solvers/events.py): a crossing that goes and comes
+back inside one interval is found, so the stance's lock does not depend on where the nodes fall."""
+import numpy as np
+import pytest
+
+import klaw_ocp
+from klaw_ocp.control.stance_law import STANCE_CONTEXT
+from klaw_ocp.solvers import PlainShootingSolver
+from klaw_ocp.solvers.integrator import subphase_kernels
+from klaw_ocp.solvers.events import SUBSAMPLES, hermite_crosses, may_cross
+
+
+def test_an_interval_that_turns_near_zero_is_looked_into():
+    # the ends rise (rates > 0) but the value falls between them: the trajectory turned inside,
+    # and a value within reach of zero may have crossed it
+    assert may_cross(1.5e-3, 6e-6, 0.03, 0.006, 0.088, +1)
+    assert not hermite_crosses(1.5e-3, 6e-6, 0.03, 0.006, 0.088, +1)
+    # far from zero, or monotone along its chord: no
+    assert not may_cross(1.5e-2, 1e-2, 0.03, 0.006, 0.088, +1)
+    assert not may_cross(1.5e-3, 6e-6, -0.03, -0.006, 0.088, +1)
+
+
+def test_hermite_interpolant_finds_a_dip_the_ends_do_not_show():
+    # g = (s - 0.5)^2 - 0.01 on [0, 1]: positive at both ends, below zero around the middle
+    g0 = g1 = 0.24
+    r0, r1 = -1.0, 1.0
+    assert hermite_crosses(g0, g1, r0, r1, 1.0, +1)        # it comes back up: an upward crossing
+    assert hermite_crosses(g0, g1, r0, r1, 1.0, -1)        # and it went down first
+    # a shallower bowl, (s - 0.5)^2 + 0.01, stays above zero
+    assert not hermite_crosses(0.26, 0.26, -1.0, 1.0, 1.0, +1)
+    # monotone intervals: only their ends' sign change counts, in its direction
+    assert hermite_crosses(-1.0, 1.0, 2.0, 2.0, 1.0, +1)
+    assert not hermite_crosses(-1.0, 1.0, 2.0, 2.0, 1.0, -1)
+    # the interval length scales the rates
+    assert not hermite_crosses(0.24, 0.24, -1.0, 1.0, 0.1, +1)   # |rates| x h too small to dip
+    assert SUBSAMPLES >= 4
+
+
+@pytest.fixture(scope="module")
+def slow_stance():
+    """Step 1's stance of a 0.5 km/h walk that starts walking, in plain shooting, and its solution.
+    Its stance leg hovers within a hundredth of a millimetre of l1 for a tenth of a second, dipping
+    below it between two nodes 88 ms apart: before the events looked inside intervals, the paper's
+    shooting found no root there (the lock came and went with the grid)."""
+    captured = []
+    solve = PlainShootingSolver.solve
+
+    def capture(self, pb):
+        solution = solve(self, pb)
+        if pb.spec.name == "stance":
+            captured.append((self, pb, solution))
+        return solution
+
+    config = {"name": "slow", "body": {"height": 1.8, "mass": 80},
+              "walk": {"speed": 0.5, "steps": 2, "start_from_rest": False, "end_at_rest": False},
+              "solver": {"method": "plain-shooting"}, "output": {"animation": False}}
+    PlainShootingSolver.solve = capture
+    try:
+        walk = klaw_ocp.simulate_walk(config)
+    finally:
+        PlainShootingSolver.solve = solve
+    return walk, captured[-1]
+
+
+def test_the_slow_walk_that_had_no_root_converges(slow_stance):
+    walk, (_, _, solution) = slow_stance
+    assert len(walk.steps) == 2
+    assert solution.success and solution.residual < 1e-8
+    assert [name for name, _ in solution.events][:1] == ["leg_too_long"]
+
+
+def _dense_first_lock(solver, pb, u, per_interval=256):
+    """The first upward crossing of w = l1 with theta1 < 0 on the RK4 trajectory of the walk's grid,
+    by brute force: every interval from its node, at ``per_interval`` partial lengths, as the event
+    integrator's own partial intervals are computed (until the first lock; None without one)."""
+    kernels = subphase_kernels(pb.spec, solver.substeps, len(pb.grid) - 1)
+    times, states, _, _ = solver.simulate(pb, u)   # no event before the first lock: the same nodes
+    l1 = pb.context[STANCE_CONTEXT.index["l1"]]
+    for k in range(len(pb.grid) - 1):
+        x0, t0, h = states[k], pb.grid[k], pb.grid[k + 1] - pb.grid[k]
+        s = np.linspace(0.0, 1.0, per_interval + 1)
+        xs = np.array([x0] + [kernels.step(x0, t0, f * h, u, pb.context)[0].ravel() for f in s[1:]])
+        g = xs[:, 0] - l1
+        up = np.flatnonzero((g[:-1] < 0) & (g[1:] >= 0) & (xs[:-1, 1] < 0))
+        if up.size:
+            return t0 + s[up[0] + 1] * h
+    return None
+
+
+def test_a_lock_between_two_nodes_is_found(slow_stance):
+    """Around the solution, the leg hovers within hundredths of a millimetre of l1 and dips below it
+    between nodes: the event integrator locks it wherever its RK4 trajectory, scanned densely
+    inside every interval, does, and at the same time."""
+    _, (solver, pb, solution) = slow_stance
+    u0 = np.array([solution.parameters[k] for k in pb.spec.unknown_names])
+    for dF in np.linspace(-0.15, 0.15, 7):
+        u = u0.copy()
+        u[0] += dF
+        log = solver.simulate(pb, u)[3]
+        dense = _dense_first_lock(solver, pb, u)
+        found = log[0][1] if log and log[0][0] == "leg_too_long" else None
+        assert (found is None) == (dense is None), (dF, log, dense)
+        if dense is not None:
+            # to the dense scan's resolution
+            assert found == pytest.approx(dense, abs=1.5 * (pb.grid[1] - pb.grid[0]) / 256), dF
