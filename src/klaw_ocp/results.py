@@ -99,9 +99,9 @@ def _step_columns(step, hips: list) -> dict:
     x, f, hip = joined(2), joined(3), joined(4)
     t = step.t_start + joined(1)
     # the pelvis's other hip, from which the hind leg and then the swing leg hang (§4.2)
-    (dx, dy), _, _ = step.pelvis.swing_hip_offset(joined(1))
+    swing_hip = step.pelvis.swing_side_hips(joined(1), hip)
     columns = {"t": t, "step": np.full(len(t), float(step.index)),
-               "swing_hip_x": hip[:, 0] + dx, "swing_hip_y": hip[:, 1] + dy,
+               "swing_hip_x": swing_hip[:, 0], "swing_hip_y": swing_hip[:, 1],
                "w": x[:, 0], "theta1": x[:, 1], "theta2": x[:, 2], "wd": x[:, 3], "theta1d": x[:, 4],
                "theta2d": x[:, 5], "hip_x": hip[:, 0], "hip_y": hip[:, 1],
                "F_w": f[:, 0], "F_theta1": f[:, 1], "F_theta2": f[:, 2], "pa": f[:, 3]}
@@ -217,8 +217,7 @@ def _swing_leg(body, step, hips, names):
     else:
         hips = np.vstack([h for sub, h in zip(step.subphases, hips) if sub.name in names])
     # the swing leg hangs from the pelvis's other hip (kinematics/pelvis.py), as it was solved
-    (dx, dy), _, _ = step.pelvis.swing_hip_offset(t)
-    hips = hips + np.column_stack([dx, dy])
+    hips = step.pelvis.swing_side_hips(t, hips)
     shank, _, ankle = leg_fk(body, hips, x[:, 6], theta4)
     return t, hips, ankle, shank
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..gait.plan import stance_leg
 from ..kinematics.leg_geometry import leg_ik
-from ..kinematics.pelvis import pelvis_angles, swing_hip_offset
+from ..kinematics.pelvis import PelvisSchedule
 from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
 from .skeleton import ANGLE_NAMES, SIDES
 from .stance_legs import stance_frames
@@ -209,19 +209,10 @@ def pelvis_angles_at(walk, t: np.ndarray) -> np.ndarray:
     step, tau = locate_steps(walk.steps, t)
     out = np.zeros((len(t), 3))
     if len(t):
-        rotation, lowered = pelvis_angles(*_pelvis_parameters(walk, step)[1:], tau, np)   # no width
+        rotation, lowered = PelvisSchedule.per_sample([s.pelvis for s in walk.steps], step).angles(tau)
         sign = np.where([stance_leg(k) == "right" for k in range(len(walk.steps))], 1.0, -1.0)[step]
         out[:, 1], out[:, 2] = sign * lowered, sign * rotation
     return out
-
-
-def _pelvis_parameters(walk, step: np.ndarray) -> tuple:
-    """Each sample's step's pelvis schedule (width, rotation start and end, list, step time), as
-    arrays (n,): one evaluation of the pelvis's formulas for every sample at once (a call per step
-    costs mostly numpy's fixed overheads)."""
-    table = np.array([[p.width, p.rotation_start, p.rotation_end, p.list_peak, p.t_step]
-                      for p in (s.pelvis for s in walk.steps)])
-    return tuple(table[step].T)
 
 
 def swing_hips(walk, pelvis_at, pieces: WalkPieces | None = None):
@@ -243,12 +234,9 @@ def model_swing_hips(walk, step: np.ndarray, tau: np.ndarray, simulated: np.ndar
     """The planar model's swing hip (n, 2) at samples of steps ``step`` and times ``tau``: the
     simulated (stance) hip ``simulated`` plus the step's pelvis offset to its other hip, the hip
     the swing was solved from."""
-    out = np.array(simulated, float)
-    if len(out):
-        (dx, dy), _, _ = swing_hip_offset(*_pelvis_parameters(walk, np.asarray(step)), np.asarray(tau, float), np)
-        out[:, 0] += dx
-        out[:, 1] += dy
-    return out
+    if not len(simulated):
+        return np.array(simulated, float)
+    return PelvisSchedule.per_sample([s.pelvis for s in walk.steps], step).swing_side_hips(tau, simulated)
 
 
 def _stance_times(foot, tau: np.ndarray) -> np.ndarray:

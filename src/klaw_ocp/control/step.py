@@ -29,8 +29,7 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .step_stages import (DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
-                          step_pelvis, swing_side_hips,
-                          swing_context)
+                          step_pelvis, swing_context)
 from .swing_spec import swing_specs
 
 #: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
@@ -237,7 +236,7 @@ class StepController:
         stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing,
                                        inp.next_t_ds)
         pelvis = step_pelvis(b, self.attrs, plan, inp.stance_standing)
-        other_hips, other_vels = swing_side_hips(pelvis, stance.t, hips, hip_vels)
+        other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
         ds = hind_leg_double_support(self.attrs, plan, stance, other_hips, other_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
         curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_at(stance.t, t1)])

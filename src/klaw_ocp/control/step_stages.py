@@ -1,9 +1,9 @@
 """The kinematic stages of a step between its stance and its swings (sections 4.2, 4.3), each a
 plain function of what the stage before it handed on:
 
-0. :func:`step_pelvis` and :func:`swing_side_hips`: the pelvis's rotation and list about the
-   stance hip (§4.2, the determinants), which put the swing leg's hip, the pelvis's other hip,
-   where the hind leg's double support, curve P and the swing models take it from
+0. :func:`step_pelvis`: the pelvis's rotation and list about the stance hip (§4.2, the
+   determinants); its ``swing_side_hips`` put the swing leg's hip, the pelvis's other hip, where
+   the hind leg's double support, curve P and the swing models take it from
    (:mod:`klaw_ocp.kinematics.pelvis`: the kinematics reaching back into the dynamics);
 1. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
    its heel-strike foot and its heel-off; the next step's double support completes them (stage 2
@@ -123,14 +123,6 @@ def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool) -> PelvisSchedule
     return PelvisSchedule(width=body.l0, rotation_start=0.0 if starts_at_rest else attrs.rad("pelvic_rotation"),
                           rotation_end=math.asin(plan.constraints.hip_shift / body.l0),
                           list_peak=attrs.rad("pelvic_list"), t_step=plan.timings.t_step)
-
-
-def swing_side_hips(pelvis: PelvisSchedule, t: np.ndarray, hips: np.ndarray,
-                    hip_vels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The pelvis's other hip (the hind leg's through the double support, then the swing leg's) and
-    its velocity at step times ``t``, from the stance hips and their velocities there (n, 2)."""
-    (dx, dy), (vx, vy), _ = pelvis.swing_hip_offset(np.asarray(t, float))
-    return hips + np.column_stack([dx, dy]), hip_vels + np.column_stack([vx, vy])
 
 
 def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,

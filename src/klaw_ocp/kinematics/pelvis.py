@@ -47,12 +47,21 @@ import numpy as np
 class PelvisSchedule:
     """One step's pelvis: ``width`` l0 (m); ``rotation_start`` ψ0 and ``rotation_end`` ψ1 (rad,
     at this step's heel strike and at the next; 0 where the walk starts or ends at rest, the feet
-    side by side); ``list_peak`` φ (rad, at mid-step); ``t_step`` (s)."""
+    side by side); ``list_peak`` φ (rad, at mid-step); ``t_step`` (s).
+
+    Its fields may also be arrays (n,), one schedule per sample (:meth:`per_sample`): every
+    formula is elementwise, so a walk's samples of many steps take one evaluation."""
     width: float
     rotation_start: float
     rotation_end: float
     list_peak: float
     t_step: float
+
+    @classmethod
+    def per_sample(cls, schedules, step) -> "PelvisSchedule":
+        """The schedules ``schedules[step[i]]`` of samples i, as one schedule of arrays (n,)."""
+        table = np.array([[p.width, p.rotation_start, p.rotation_end, p.list_peak, p.t_step] for p in schedules])
+        return cls(*table[np.asarray(step, int)].T)
 
     @property
     def landing_shift(self) -> float:
@@ -68,33 +77,43 @@ class PelvisSchedule:
         return swing_hip_offset(self.width, self.rotation_start, self.rotation_end, self.list_peak,
                                 self.t_step, t, ops)
 
+    def swing_side_hips(self, t, hips, hip_vels=None):
+        """The pelvis's other hip (n, 2) at step times ``t`` from the stance hips ``hips`` (n, 2)
+        there; with the stance hips' velocities ``hip_vels``, (hips, velocities)."""
+        (dx, dy), (vx, vy), _ = self.swing_hip_offset(np.asarray(t, float))
+        other = np.asarray(hips, float) + np.column_stack([dx, dy])
+        if hip_vels is None:
+            return other
+        return other, np.asarray(hip_vels, float) + np.column_stack([vx, vy])
 
-def _phase(t_step, t, ops):
-    """π s and its rate π/t_step."""
-    rate = math.pi / t_step
-    return rate * t, rate
+
+def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops):
+    """(rotation, list) at step times ``t`` and their first and second time derivatives:
+    rotation = span (1 + cos a)/2 − ψ1 and list = φ sin² a = φ (1 − cos 2a)/2, a = π t/t_step."""
+    k = math.pi / t_step   # a float, an array (one schedule per sample) or a CasADi symbol
+    a = k * t
+    span = rotation_start + rotation_end
+    rotation = (span * (1 + ops.cos(a)) / 2 - rotation_end,
+                -span * k * ops.sin(a) / 2,
+                -span * k * k * ops.cos(a) / 2)
+    lowered = (list_peak * ops.sin(a) ** 2,
+               list_peak * k * ops.sin(2 * a),
+               2 * list_peak * k * k * ops.cos(2 * a))
+    return rotation, lowered
 
 
 def pelvis_angles(rotation_start, rotation_end, list_peak, t_step, t, ops=np):
     """(rotation, list) (rad) at step times ``t`` (see the module's docstring)."""
-    a, _ = _phase(t_step, t, ops)
-    c = (1 + ops.cos(a)) / 2
-    return (rotation_start + rotation_end) * c - rotation_end, list_peak * ops.sin(a) ** 2
+    rotation, lowered = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops)
+    return rotation[0], lowered[0]
 
 
 def swing_hip_offset(width, rotation_start, rotation_end, list_peak, t_step, t, ops=np):
     """((Δx, Δy), (Δx', Δy'), (Δx'', Δy'')): the swing-side hip minus the stance hip in the sagittal
     plane and its time derivatives at step times ``t``."""
-    a, k = _phase(t_step, t, ops)
-    span = rotation_start + rotation_end
-    # rotation r = span (1 + cos a)/2 - rotation_end; list q = phi sin^2 a = phi (1 - cos 2a)/2
-    r = span * (1 + ops.cos(a)) / 2 - rotation_end
-    r1 = -span * k * ops.sin(a) / 2
-    r2 = -span * k * k * ops.cos(a) / 2
-    q = list_peak * ops.sin(a) ** 2
-    q1 = list_peak * k * ops.sin(2 * a)
-    q2 = 2 * list_peak * k * k * ops.cos(2 * a)
+    (r, r1, r2), (q, q1, q2) = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops)
     sr, cr, sq, cq = ops.sin(r), ops.cos(r), ops.sin(q), ops.cos(q)
+    # dx = -l0 sin r
     dx = -width * sr
     dx1 = -width * cr * r1
     dx2 = width * (sr * r1 * r1 - cr * r2)
