@@ -31,6 +31,7 @@ from ..dynamics import stance_hip
 from ..kinematics.leg_geometry import reach_for_knee_flexion
 from ..kinematics.pelvis import PelvisSchedule
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
+from ..kinematics.pitch_rules import REACH_FRACTION
 from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
 from .stance_law import STANCE_PARAMETERS
@@ -153,9 +154,10 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
     t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
     pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
     # the pitch at which the knee has its toe-off flexion (the knee's schedule ends there)
+    # and the least pitch at which the leg reaches its ankle at all (toe_off_pitch's floor), in one pass
     reach = float(reach_for_knee_flexion(hind.foot.body, hind.knee_toe_off)) / hind.foot.body.l1
-    wanted = float(hind.reach_pitch(hip_to[None], reach)[0])
-    pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, wanted, plan.constraints.theta3)
+    wanted, least = hind.reach_pitch(np.vstack([hip_to, hip_to]), np.array([reach, REACH_FRACTION]))
+    pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, float(wanted), plan.constraints.theta3, float(least))
     hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds, hip_toe_off=hip_to)
     ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
     # swing1 starts with the thigh's mean rate over the last tenth of the double support: the

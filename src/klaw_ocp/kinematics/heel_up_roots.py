@@ -28,6 +28,8 @@ _EDGE = 1e-15
 #: at most this many safeguarded Newton steps for a root in the meta-off band (from the secant of
 #: its ends, 3-4 reach 1e-14 rad: the distance is nearly linear in the pitch there)
 _BAND_STEPS = 30
+#: the band root's distance error (m) at which it stops: round-off of the ankle's distance
+_BAND_TOL = 1e-15
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,8 @@ def _band_root(foot: FlatFoot, q: float, band: float, hips: np.ndarray, radius: 
         ay = body.l13 * sb + (-s * off_x + c * off_y) - hips[:, 1]
         dist = np.hypot(ax, ay)
         g = dist - radius
+        if np.all(np.abs(g) <= _BAND_TOL):
+            return p   # met to round-off: a further Newton step would move p by < 1e-14
         rate = (p - q + band) / (2 * band)
         dax = body.l13 * sb * rate + (-s * off_x + c * off_y)
         day = body.l13 * cb * rate + (-c * off_x - s * off_y)

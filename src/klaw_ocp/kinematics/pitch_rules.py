@@ -76,6 +76,10 @@ def rocker_pitch(t, t_flat, p0, rate):
 def _soft_plus(v, width):
     """A C1 max(v, 0): 0 for v <= -width, v for v >= width, the parabola (v + width)²/(4 width)
     between (v itself for width 0)."""
+    if isinstance(width, float):   # one stance's rule (the walk's calls): no per-sample masks
+        if width <= 0:
+            return np.maximum(v, 0.0)
+        return np.where(v <= -width, 0.0, np.where(v >= width, v, (v + width) ** 2 / (4 * width)))
     width = np.asarray(width, float)
     safe = np.where(width > 0, width, 1.0)
     blend = np.where(v <= -width, 0.0, np.where(v >= width, v, (v + width) ** 2 / (4 * safe)))
@@ -84,7 +88,10 @@ def _soft_plus(v, width):
 
 def _floor_ramp(t, t_flat, t_knee):
     """0 at foot flat to 1 at t_knee (a smoothstep; 1 throughout where t_knee <= t_flat)."""
-    span = np.asarray(t_knee - t_flat, float)
+    span = t_knee - t_flat
+    if isinstance(span, float):   # one stance's rule
+        return smoothstep((t - t_flat) / span) if span > 0 else np.ones(np.shape(t))
+    span = np.asarray(span, float)
     return np.where(span > 0, smoothstep((t - t_flat) / np.where(span > 0, span, 1.0)), 1.0)
 
 
@@ -96,8 +103,9 @@ def knee_schedule(t, t_flat, t_knee, t_knee_end, knee_floor, knee_toe_off, knee_
     by the θ5 limit) at least ``knee_hold`` (blended over KNEE_HOLD_BLEND)."""
     t = np.asarray(t, float)
     ramp = _floor_ramp(t, t_flat, t_knee)
-    span = np.asarray(t_knee_end - t_knee, float)
-    s = clamp((t - t_knee) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+    span = t_knee_end - t_knee
+    s = clamp((t - t_knee) / (span if span > 0 else 1.0) if isinstance(span, float)
+              else (t - t_knee) / np.where(np.asarray(span) > 0, span, 1.0), 0.0, 1.0)
     knee = knee_floor * ramp + (knee_toe_off - knee_floor) * s * s
     hold = (t >= t_hold) & (knee_hold > 0)
     if np.any(hold):
@@ -114,7 +122,7 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, deficit) 
     l1 (1 where no reach rule applies)."""
     def at(name, rows):
         value = rules[name]
-        return value[rows] if np.ndim(value) else value
+        return value[rows] if isinstance(value, np.ndarray) and value.ndim else value
 
     body = geometry.foot.body
     pitch, fraction = np.zeros(len(t)), np.ones(len(t))

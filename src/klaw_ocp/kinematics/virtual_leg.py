@@ -288,7 +288,7 @@ MIN_SWING1_THIGH_TRAVEL = 0.15
 
 
 def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_wanted: float,
-                  theta3_target: float) -> float:
+                  theta3_target: float, reach: float | None = None) -> float:
     """The foot's pitch at toe-off: ``pitch_wanted`` (the ``toe_off_foot_pitch`` attribute), at
     least where the double support starts and the leg's reach, lowered if needed so that the thigh
     is not ahead of ``theta3_target + MIN_SWING1_THIGH_TRAVEL``.
@@ -300,7 +300,8 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
     ankle-on-curve-P constraint is singular. A person starting to walk raises the heel only as far
     as the hip has moved over the foot; so does this rule. In steady walking the attribute holds."""
     hips = np.atleast_2d(np.asarray(hip, float))
-    reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
+    if reach is None:   # the pitch at which the leg reaches with REACH_FRACTION (callers may have it)
+        reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
     bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
 
     def thigh_ahead(pitch: float) -> float:
