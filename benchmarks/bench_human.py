@@ -30,7 +30,7 @@ import klaw_ocp
 from klaw_ocp.body_motion import body_motion
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
 from klaw_ocp.human_gait import GPS_VARIABLES, human_figures
-from klaw_ocp.results import foot_events, walk_table
+from klaw_ocp.results import foot_events, swing_hip_torque_peak
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS_KMH = (3.0, 5.0, 6.0)
@@ -251,16 +251,13 @@ def measure(walk, fps: float) -> dict:
                  if len(prev) and len(nxt) else f"t = {mid[k]:.3f} s")
         elsewhere = (float(inner[k, col]), leg_names[col], where)
     # peak swing hip torque of each steady step
-    tab = walk_table(walk)
-    swing_rows = np.isin(tab["subphase"], ("swing1", "swing2", "swing3"))
+    # (summary.json's peak_swing_hip_torque_per_kg: results.swing_hip_torque_peak)
     torque_at = []
     for k in range(START_STEPS, len(steps)):
-        rows = np.flatnonzero(swing_rows & (tab["step"] == k))
-        if len(rows):
-            i = rows[np.nanargmax(np.abs(tab["F_theta3"][rows]))]
-            vals["hip_torque"].append(abs(float(tab["F_theta3"][i])) / mass)
-            t_to = steps[k].t_start + steps[k].plan.timings.t_ds
-            torque_at.append((float(tab["F_theta3"][i]), str(tab["subphase"][i]), float(tab["t"][i]) - t_to))
+        torque, subphase, t = swing_hip_torque_peak(steps[k])
+        if subphase:
+            vals["hip_torque"].append(abs(torque) / mass)
+            torque_at.append((torque, subphase, t - steps[k].plan.timings.t_ds))
     human = human_figures(walk, bm, START_STEPS)
     for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump"):
         vals[key] = list(human.values[key])

@@ -67,6 +67,24 @@ def test_summary_reports_how_far_the_monitored_hip_dips(natural_walk):
     assert all(s["nlp"] in ("rootfinder", "bisection-secant") for e in summary["steps"] for s in e["subphases"])
 
 
+def test_summary_reports_each_steps_peak_swing_hip_torque(natural_walk):
+    """Per step, the largest |F_theta3| over the swing subphases' nodes, swing2's first node
+    included (its holding spring-damper takes over there), in N m and per kg of body mass."""
+    summary = walk_summary(natural_walk)
+    mass = natural_walk.spec.body.mass
+    for step, entry in zip(natural_walk.steps, summary["steps"]):
+        swings = [sub for sub in step.subphases if sub.name != "stance"]
+        torques = np.concatenate([sub.forces[:, 4] for sub in swings])   # F_theta3 (SWING_FORCES)
+        assert entry["peak_swing_hip_torque_N_m"] == pytest.approx(np.abs(torques).max(), rel=1e-12)
+        assert entry["peak_swing_hip_torque_per_kg"] == pytest.approx(entry["peak_swing_hip_torque_N_m"] / mass)
+        assert entry["peak_swing_hip_torque_N_m"] > 10.0   # a swing is driven
+    # dynamics.csv keeps one sample at each subphase boundary: its swing torques never exceed it
+    table = walk_table(natural_walk)
+    for k, entry in enumerate(summary["steps"]):
+        rows = (table["step"] == k) & np.isin(table["subphase"], ("swing1", "swing2", "swing3"))
+        assert np.abs(table["F_theta3"][rows]).max() <= entry["peak_swing_hip_torque_N_m"] * (1 + 1e-12)
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_toe_clears_the_ground_in_swing2_and_the_heel_comes_down_onto_it_in_swing3(method):
     """Recomputed from the states, not read from the solver's path function at its 21 nodes: the

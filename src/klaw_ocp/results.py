@@ -29,6 +29,7 @@ import numpy as np
 from .body_motion.swing_foot_guard import guard_grid, lifted_feet, sole_heights
 from .body_motion.walk_samples import gradient
 from .control.parameter_units import parameter_unit
+from .control.swing_law import SWING_FORCES
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
 from .errors import finite_real
@@ -253,6 +254,7 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
     entry = step.plan.as_dict()
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                  hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
+                 **peak_swing_hip_torque(step, spec.body.mass),
                  hip_dip_m=hip_dip(spec.body, step.subphases[stance], step_offsets[stance]), notes=list(step.notes),
                  swing_foot=swing_foot,
                  curve_p={k: (v if isinstance(v, list) else float(v)) for k, v in step.curve_p.items()})
@@ -270,6 +272,31 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
         "build_s": float(s.build_s),
     } for s in step.subphases]
     return entry
+
+
+#: the swing hip torque's column in a swing subphase's forces
+_F_THETA3 = SWING_FORCES.index("F_theta3")
+
+
+def swing_hip_torque_peak(step) -> tuple[float, str, float]:
+    """The swing hip torque F_θ3 (N m) of largest magnitude over a step's swing subphases at their
+    nodes (each subphase's first node included: where swing2's holding spring-damper takes over
+    at t1, the torque can jump), its subphase and its time (s, from the step's heel strike)."""
+    best = (0.0, "", float("nan"))
+    for sub in step.subphases:
+        if sub.name == "stance" or not len(sub.forces):
+            continue
+        k = int(np.argmax(np.abs(sub.forces[:, _F_THETA3])))
+        if abs(sub.forces[k, _F_THETA3]) > abs(best[0]):
+            best = (float(sub.forces[k, _F_THETA3]), sub.name, float(sub.t[k]))
+    return best
+
+
+def peak_swing_hip_torque(step, mass: float) -> dict:
+    """summary.json's peak swing hip torque of a step (:func:`swing_hip_torque_peak`): N m, and per
+    kg of body mass (people's peaks near 1 N m/kg at 5 km/h: docs/human-gait.md)."""
+    peak = abs(swing_hip_torque_peak(step)[0])
+    return {"peak_swing_hip_torque_N_m": peak, "peak_swing_hip_torque_per_kg": peak / mass}
 
 
 def walk_summary(walk, table: dict | None = None, steps: list | None = None, offsets: list | None = None) -> dict:
