@@ -11,13 +11,15 @@ For each step (principle 1: high level before the step, low level during it):
 
 First step: a walk that starts "walking" begins on the periodic orbit of its first step: the
 initial hip speed is found (secant method) so that the hip leaves the step as fast as it entered
-it. A walk that starts from rest (``start_from_rest``) begins standing on both feet side by side,
-at rest; its first stance starts at theta1 = 0 and the hind foot swings from beside the stance
-foot. See docs/walk.md for the last step and for what changes from step to step.
+it, and from there the whole stance state (theta2, the hip's velocity, the trunk's rate) is
+iterated through the step and its heel-strike map until it repeats
+(:func:`klaw_ocp.control.periodic_start.periodic_start`). A walk that starts from rest
+(``start_from_rest``) begins standing on both feet side by side, at rest; its first stance starts
+at theta1 = 0 and the hind foot swings from beside the stance foot. See docs/walk.md for the last
+step and for what changes from step to step.
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -28,8 +30,9 @@ from .body import Body
 from .config import DEFAULT_FPS
 from .console import CasadiMessages, DeferredInterrupt
 from .control.gains import control_gains
+from .control.periodic_start import periodic_start
 from .control.step import StepController, StepInput, StepResult
-from .dynamics import heel_strike_map, stance_hip
+from .dynamics import heel_strike_map
 from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
 from .solvers import make_solver
@@ -96,55 +99,6 @@ class Walk:
         t_after, hips_after = following.hind_samples
         t = np.concatenate([step.subphase("stance").t, t_after[1:]])
         return following.hind_foot.frames(t, np.vstack([step.stance_hips, hips_after[1:]]))
-
-
-def _walking_state(con, speed: float, theta2: float) -> np.ndarray:
-    """Heel-strike stance state (mirror of eq. 3) with a horizontal hip velocity ``speed``."""
-    w, th = con.w, -con.theta1
-    return np.array([w, th, theta2, speed * math.sin(th), speed * math.cos(th) / w, 0.0])
-
-
-def periodic_start(controller: StepController, plan, inp: StepInput, tol: float = 1e-9) -> np.ndarray:
-    """Initial stance state whose hip leaves the step at the speed it entered it (secant method)."""
-    con, theta2 = plan.constraints, controller.gains.theta2_ref
-    mean = plan.constraints.step_length / plan.timings.t_step
-
-    def mismatch(speed):
-        inp.x0 = _walking_state(con, speed, theta2)
-        stance = controller.solve_stance(plan, inp, 0)
-        return stance_hip(controller.body, stance.final_state, np.zeros(2))[1][0] - speed
-
-    v0 = 1.2 * mean
-    f0 = mismatch(v0)
-    # the second trial speed: the first of these whose stance has a solution (a stance that only
-    # just locks its leg can have none at 1.35 of the mean speed: 1 km/h at 1.8 m in plain shooting)
-    for ratio in (1.35, 1.05, 1.3, 1.1):
-        try:
-            v1 = ratio * mean
-            f1 = mismatch(v1)
-            break
-        except ConvergenceError:
-            if ratio == 1.1:
-                raise
-    for _ in range(30):
-        if abs(f1) < tol or f1 == f0:
-            break
-        # a secant step limited to 20 % of the mean speed: far from the orbit the first stance
-        # may have no solution at all
-        step = float(np.clip(-f1 * (v1 - v0) / (f1 - f0), -0.2 * mean, 0.2 * mean))
-        # a trial speed whose stance has no solution: go half as far, or past it (plain shooting
-        # fails on narrow bands of speeds where a lock event meets a grid node; the mismatch itself
-        # is smooth across them)
-        for factor in (1.0, 0.5, 1.5, 0.25, 2.0, 0.125):
-            try:
-                f_new = mismatch(v1 + factor * step)
-                break
-            except ConvergenceError:
-                continue
-        else:
-            raise ConvergenceError(0, "stance", abs(f1), "no periodic start found (initial hip speed)")
-        v0, v1, f0, f1 = v1, v1 + factor * step, f1, f_new
-    return _walking_state(con, v1, theta2)
 
 
 def _first_input(controller: StepController, spec: WalkSpec) -> StepInput:
