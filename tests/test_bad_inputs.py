@@ -325,10 +325,25 @@ GOOD = {"name": "t", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0,
     ({"method": 3}, "method: got 3"),
     ({"progress": "yes"}, "progress: got 'yes', allowed True or False"),
     ({"raise_on_failure": None}, "raise_on_failure: got None"),
+    ({"on_step": 5}, "on_step: got 5, allowed None or a callable taking the walk"),
+    ({"on_step": "print"}, "on_step: got 'print', allowed None or a callable"),
 ])
-def test_simulate_walk_refuses_bad_keyword_arguments(kwargs, start):
+def test_simulate_walk_refuses_bad_keyword_arguments(kwargs, start, monkeypatch):
+    """Before anything is built or solved (an on_step that is no callable used to fail with a
+    TypeError after step 0): no step controller is made."""
+    import klaw_ocp.walk as walk_module
+
+    def no_controller(*args, **kw):
+        raise AssertionError("a step controller was built before the arguments were checked")
+    monkeypatch.setattr(walk_module, "StepController", no_controller)
     with pytest.raises(ConfigError, match="^" + start.replace("(", r"\(").replace(")", r"\)")):
         klaw_ocp.simulate_walk(GOOD, **kwargs)
+
+
+def test_simulate_walk_calls_a_callable_on_step_after_each_step():
+    seen = []
+    walk = klaw_ocp.simulate_walk(GOOD, on_step=lambda w: seen.append(len(w.steps)))
+    assert seen == list(range(1, len(walk.steps) + 1))
 
 
 def test_simulate_walk_checks_a_hand_made_walk_spec():

@@ -147,7 +147,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what is allowed;
     :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk outside the
     supported envelope)."""
-    spec = _checked_spec(spec, method, progress, raise_on_failure)
+    spec = _checked_spec(spec, method, progress, raise_on_failure, on_step)
     wall0, compile0 = time.perf_counter(), compile_seconds()
     solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
                          max_iterations=spec.max_iterations, nlp=spec.nlp)
@@ -223,7 +223,7 @@ _SPEC_ALLOWED = ("a WalkSpec, an ExperimentConfig, a mapping in the config's sha
                  "or the path of a YAML config file (a str or os.PathLike)")
 
 
-def _checked_spec(spec, method, progress, raise_on_failure) -> WalkSpec:
+def _checked_spec(spec, method, progress, raise_on_failure, on_step=None) -> WalkSpec:
     """:func:`simulate_walk`'s arguments checked before anything is built or solved: the walk as
     a :class:`WalkSpec` within the config's bounds, or one ConfigError line naming the argument."""
     import os
@@ -240,6 +240,8 @@ def _checked_spec(spec, method, progress, raise_on_failure) -> WalkSpec:
     for name, value in (("progress", progress), ("raise_on_failure", raise_on_failure)):
         if not isinstance(value, (bool, np.bool_)):
             raise ConfigError(out_of_range(name, value, "True or False"))
+    if on_step is not None and not callable(on_step):   # else a TypeError after the first step
+        raise ConfigError(out_of_range("on_step", on_step, "None or a callable taking the walk"))
     if isinstance(spec, WalkSpec):
         spec = spec if method is None else replace(spec, method=method)
     elif isinstance(spec, ExperimentConfig):
