@@ -117,11 +117,11 @@ def test_ipopt_constraint_jacobian_equals_ad(problems):
     np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-12)
 
 
-def _tiny_library(tmp_cache, counter, tag="a"):
+def _tiny_library(tmp_cache, counter, tag="a", power=2):
     def build(compiling):
         counter.append(compiling)
         x = ca.SX.sym("x", 3)
-        return [ca.Function("tiny_square", [x], [x ** 2]), ca.Function("tiny_sum", [x], [ca.sum1(x)])]
+        return [ca.Function("tiny_square", [x], [x ** power]), ca.Function("tiny_sum", [x], [ca.sum1(x)])]
     return kernels.KernelLibrary(["tiny", tag], ["tiny_square", "tiny_sum"], build)
 
 
@@ -144,17 +144,81 @@ def test_cache_hit_builds_nothing(tmp_path, monkeypatch):
 
 @requires_compiler
 def test_a_damaged_library_is_rebuilt(tmp_path, monkeypatch):
-    """A cached file that does not load (truncated, or from another machine sharing the folder)
-    is compiled again. It is damaged here before this process ever loaded it: a library in use
-    is never written in place, a new one is renamed over it."""
+    """A cached file that is not the library its stamp names is compiled again, with a one-line
+    note, before it is ever loaded: never written in place here (a library in use is not
+    touched), it is damaged before this process loads it."""
     monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
     calls = []
     library = _tiny_library(tmp_path, calls, tag="damaged")
     path = library.library_path()
     path.parent.mkdir(parents=True)
     path.write_bytes(b"not a shared library")
-    assert library.functions()["tiny_sum"]([1.0, 1.0, 1.0])[0][0] == 3.0
+    with pytest.warns(kernels.KernelCacheNote, match="has no readable checksum"):
+        assert library.functions()["tiny_sum"]([1.0, 1.0, 1.0])[0][0] == 3.0
     assert library.compiled and library.path == path and calls == [True]
+
+
+def _cached_pair(tmp_path, tag, power=2):
+    """A library compiled into the cache and its checksum stamp (paths), not loaded: a library
+    this process has mapped must not be written in place (that is a crash, not a test)."""
+    library = _tiny_library(tmp_path, [], tag=tag, power=power)
+    path = library.library_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    library._compile(kernels.compiler(), path.parent, path)
+    return path, path.with_suffix(".sha256")
+
+
+@requires_compiler
+@pytest.mark.parametrize("damage", ["truncated", "another kernel's library", "another kernel's pair",
+                                    "stamp missing", "stamp garbled"])
+def test_a_cached_library_is_verified_before_it_is_loaded(tmp_path, monkeypatch, damage):
+    """Loading a truncated library can kill the process (SIGBUS) and another kernel's loads other
+    symbols: each is found by its stamp (key and SHA-256, written with it) and rebuilt once, with
+    one note; the rebuilt library computes, and its stamp matches it again."""
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    path, stamp = _cached_pair(tmp_path, "victim")
+    # another kernel with the same symbols: loaded, it would compute x^3 without a word
+    other, other_stamp = _cached_pair(tmp_path, "other", power=3)
+    if damage == "truncated":
+        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    elif damage == "another kernel's library":
+        path.write_bytes(other.read_bytes())
+    elif damage == "another kernel's pair":
+        path.write_bytes(other.read_bytes())
+        stamp.write_bytes(other_stamp.read_bytes())
+    elif damage == "stamp missing":
+        stamp.unlink()
+    else:
+        stamp.write_bytes(b"\xff\xfe garbage")
+    calls = []
+    library = _tiny_library(tmp_path, calls, tag="victim")
+    with pytest.warns(kernels.KernelCacheNote) as notes:
+        assert library.functions()["tiny_square"]([1.0, 2.0, 3.0])[0].tolist() == [1.0, 4.0, 9.0]
+    assert len(notes) == 1 and "\n" not in str(notes[0].message) and str(path) in str(notes[0].message)
+    assert calls == [True] and library.compiled
+    assert library._damage(path) is None, "the rebuilt library matches its stamp"
+
+
+@requires_compiler
+def test_a_library_that_verifies_loads_without_a_note(tmp_path, monkeypatch):
+    import warnings
+    monkeypatch.setenv("KLAW_OCP_CACHE_DIR", str(tmp_path))
+    _cached_pair(tmp_path, "fine")
+    calls = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _tiny_library(tmp_path, calls, tag="fine").functions()["tiny_sum"]([1.0, 2.0, 3.0])[0][0] == 6.0
+    assert calls == []
+
+
+def test_the_command_line_shows_the_packages_notes_in_one_line(capsys):
+    from klaw_ocp import cli
+    cli._one_line_warning(kernels.KernelCacheNote("klaw_ocp: the cached solver kernel /c/k.so does not match "
+                                                  "its checksum (damaged or replaced); rebuilding it"),
+                          kernels.KernelCacheNote, "kernels.py", 1)
+    err = capsys.readouterr().err
+    assert err == ("klaw-ocp: the cached solver kernel /c/k.so does not match its checksum (damaged or "
+                   "replaced); rebuilding it\n")
 
 
 #: a child process that builds (or finds) the "race" library and reports what it did as JSON

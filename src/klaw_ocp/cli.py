@@ -23,6 +23,7 @@ import argparse
 import os
 import sys
 import textwrap
+import warnings
 from dataclasses import dataclass
 from typing import Callable
 
@@ -165,9 +166,24 @@ def parse(parser: KlawArgumentParser, argv: list[str] | None) -> argparse.Namesp
     return args
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """The package's own notes (``klaw_ocp: ...``, e.g. a damaged kernel rebuilt) as one line on
+    stderr, in the command's voice; any other warning as Python shows it."""
+    text = str(message)
+    if text.startswith("klaw_ocp: "):
+        from tqdm import tqdm   # clears and redraws a progress bar around the line
+        tqdm.write(f"{PROG}: {' '.join(text[len('klaw_ocp: '):].split())}", file=sys.stderr)
+    else:
+        _show_warning(message, category, filename, lineno, file, line)
+
+
+_show_warning = warnings.showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``klaw-ocp``; returns the exit code (0 ok, 2 bad input, 3 a subphase did not converge,
     130 Ctrl-C; :mod:`klaw_ocp.commands`)."""
+    warnings.showwarning = _one_line_warning
     parser = build_parser()
     try:
         try:

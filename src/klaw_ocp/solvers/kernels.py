@@ -20,7 +20,13 @@ costs tens of microseconds of conversion. A :class:`KernelLibrary` therefore
 The cache folder is ``$KLAW_OCP_CACHE_DIR``, else ``$XDG_CACHE_HOME/klaw_ocp``, else
 ``~/.cache/klaw_ocp``. Several processes (sweep workers) may build the same library at once:
 each compiles into its own temporary file and renames it into place, which is atomic, so a
-reader sees either no library or a whole one. A library that does not load is rebuilt.
+reader sees either no library or a whole one. Beside each library its key and the SHA-256 of its
+bytes are written (``.sha256``, flushed to disk and renamed into place before the library): a
+library is verified against them before it is loaded, since loading a damaged one can kill the
+process (a truncated file: SIGBUS when the loader touches the missing pages) or load another
+kernel's code (a library copied over another: undefined symbols). One that does not match, or
+does not load, is rebuilt, once, with a one-line note (a ``RuntimeWarning``,
+:class:`KernelCacheNote`); if the rebuilt one fails too, CasADi evaluates the kernels.
 
 Compiling takes seconds where everything else takes milliseconds, so it is announced and timed:
 :func:`compile_notices` tells a listener (the command line) before compiling starts, and
@@ -224,6 +230,28 @@ class _CasadiFunction:
         return [np.asarray(ca.densify(out)).ravel(order="F") for out in self._fn.call(args)]
 
 
+class KernelCacheNote(RuntimeWarning):
+    """A cached kernel library was damaged or would not load, and was rebuilt (one line)."""
+
+
+def _file_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _stamp_text(key: str, digest: str) -> str:
+    return f"{key} {digest}\n"
+
+
+def _write_synced(path: Path, data: bytes) -> None:
+    """``data`` into ``path``, flushed to the disk before it is renamed into place."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
 class KernelLibrary:
     """Named CasADi Functions built on first use, compiled and cached when a compiler works.
 
@@ -275,12 +303,16 @@ class KernelLibrary:
             return None
         cc, folder = compiler(), path.parent
         if path.exists():
-            try:
-                lib = ctypes.CDLL(str(path))
-                self.path = path
-                return lib
-            except OSError:
-                pass   # a library from another machine sharing the folder, or damaged: rebuild
+            problem = self._damage(path)
+            if problem is None:
+                try:
+                    lib = ctypes.CDLL(str(path))
+                    self.path = path
+                    return lib
+                except OSError as err:   # e.g. built on another machine sharing the folder
+                    problem = f"does not load ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
+            warnings.warn(f"klaw_ocp: the cached solver kernel {path} {problem}; rebuilding it",
+                          KernelCacheNote, stacklevel=3)
         try:
             with _compiling(folder):
                 folder.mkdir(parents=True, exist_ok=True)
@@ -294,6 +326,23 @@ class KernelLibrary:
             return None
         self.path = path
         return lib
+
+    def _stamp_path(self, path: Path) -> Path:
+        return path.with_suffix(".sha256")
+
+    def _damage(self, path: Path) -> Optional[str]:
+        """Why the cached library at ``path`` must not be loaded, or None: its stamp (this key and
+        the SHA-256 of its bytes) missing, for another key, or not its bytes'."""
+        try:
+            stamp = self._stamp_path(path).read_text(encoding="ascii").split()
+            digest = _file_digest(path)
+        except (OSError, UnicodeDecodeError) as err:
+            return f"has no readable checksum ({type(err).__name__})"
+        if len(stamp) != 2 or stamp[0] != path.stem:
+            return "has a checksum of another kernel"
+        if stamp[1] != digest:
+            return "does not match its checksum (damaged or replaced)"
+        return None
 
     def _compile(self, cc: str, folder: Path, path: Path) -> None:
         with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
@@ -309,6 +358,11 @@ class KernelLibrary:
             if result.returncode != 0:
                 raise RuntimeError(f"{cc} exited with {result.returncode}: {result.stderr.strip()[:300]}")
             os.chmod(built, 0o755)
+            with open(built, "rb+") as f:   # on the disk before it is renamed into place
+                os.fsync(f.fileno())
+            # the stamp first: a reader that meets a new library finds its stamp (one that meets a
+            # new stamp beside the old library sees a mismatch and rebuilds, which is only slower)
+            _write_synced(self._stamp_path(path), _stamp_text(path.stem, _file_digest(built)).encode("ascii"))
             os.replace(built, path)   # atomic: concurrent builders each rename a whole library
 
     def load(self) -> Optional[ctypes.CDLL]:
