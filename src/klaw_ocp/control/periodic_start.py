@@ -44,22 +44,25 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
     it repeats: theta2 and the trunk's rate, which the balance controller settles, and the hip's
     vertical velocity, which the secant leaves free (:data:`PERIODIC_TOL`). The stance does not
     depend on the swing (assumption 4), so the orbit of the stance is the walk's."""
-    solved = x = _speed_matched_start(controller, plan, inp, tol)
+    x, stance = _speed_matched_start(controller, plan, inp, tol)   # its stance solved already
+    solved = x
     con, body = plan.constraints, controller.body
     xs, gs = [], []   # the states tried and where the step took them (Anderson's history)
     for _ in range(PERIODIC_PASSES):
-        inp.x0 = x
-        try:
-            stance = controller.solve_stance(plan, inp, 0)
-        except ConvergenceError:
-            break   # start from the last state whose stance was solved, near the orbit
+        if stance is None:
+            inp.x0 = x
+            try:
+                stance = controller.solve_stance(plan, inp, 0)
+            except ConvergenceError:
+                break   # start from the last state whose stance was solved, near the orbit
         solved = x
         g = heel_strike_map(body, stance.final_state, np.array([con.step_length, 0.0]),
                             hip_shift=np.array([con.hip_shift, 0.0]))
         if np.max(np.abs(g - x)) <= PERIODIC_TOL:
             break
         xs, gs = (xs + [x])[-PERIODIC_DEPTH - 1:], (gs + [g])[-PERIODIC_DEPTH - 1:]
-        x = _anderson(np.array(xs), np.array(gs))
+        x, stance = _anderson(np.array(xs), np.array(gs)), None
+    inp.x0 = solved
     return solved
 
 
@@ -76,14 +79,16 @@ def _anderson(xs: np.ndarray, gs: np.ndarray) -> np.ndarray:
     return gs[-1] - d_g @ gamma
 
 
-def _speed_matched_start(controller: StepController, plan, inp: StepInput, tol: float) -> np.ndarray:
-    """Initial stance state whose hip leaves the step at the speed it entered it (secant method)."""
+def _speed_matched_start(controller: StepController, plan, inp: StepInput, tol: float) -> tuple:
+    """Initial stance state whose hip leaves the step at the speed it entered it (secant method),
+    and its solved stance."""
     con, theta2 = plan.constraints, controller.gains.theta2_ref
     mean = plan.constraints.step_length / plan.timings.t_step
+    stances = {}
 
     def mismatch(speed):
         inp.x0 = _walking_state(con, speed, theta2)
-        stance = controller.solve_stance(plan, inp, 0)
+        stances[speed] = stance = controller.solve_stance(plan, inp, 0)
         return stance_hip(controller.body, stance.final_state, np.zeros(2))[1][0] - speed
 
     v0 = 1.2 * mean
@@ -108,12 +113,13 @@ def _speed_matched_start(controller: StepController, plan, inp: StepInput, tol: 
         # fails on narrow bands of speeds where a lock event meets a grid node; the mismatch itself
         # is smooth across them)
         for factor in (1.0, 0.5, 1.5, 0.25, 2.0, 0.125):
+            trial = v1 + factor * step
             try:
-                f_new = mismatch(v1 + factor * step)
+                f_new = mismatch(trial)
                 break
             except ConvergenceError:
                 continue
         else:
             raise ConvergenceError(0, "stance", abs(f1), "no periodic start found (initial hip speed)")
-        v0, v1, f0, f1 = v1, v1 + factor * step, f1, f_new
-    return _walking_state(con, v1, theta2)
+        v0, v1, f0, f1 = v1, trial, f1, f_new
+    return _walking_state(con, v1, theta2), stances[v1]

@@ -102,7 +102,7 @@ class EventIntegrator:
         kernels = subphase_kernels(spec, self.substeps, n)
         fast = kernels.sim(pb.x0, pb.grid[:-1], pb.h, u, pb.context)[0].reshape(n, spec.nx)
         states = np.vstack([pb.x0, fast])
-        start = self._first_sign_change(kernels, pb, states, u) if armed and spec.events else None
+        start, known = self._first_sign_change(kernels, pb, states, u) if armed and spec.events else (None, {})
         if start is None:
             return pb.grid.copy(), states, pb.context.copy(), []
         step = lambda x, t, h, u, c: kernels.step(x, t, h, u, c)[0]
@@ -114,7 +114,8 @@ class EventIntegrator:
             t0, t1 = pb.grid[k], pb.grid[k + 1]
             while True:
                 x1 = step(x, t0, t1 - t0, u, c)
-                hit = self._first_event(kernels, x, t0, x1, t1, u, c, mode)
+                hit = self._first_event(kernels, x, t0, x1, t1, u, c, mode, known)
+                known = {}   # the fast pass's brackets hold for the interval it started from only
                 if hit is None:
                     break
                 event, h = hit
@@ -134,9 +135,10 @@ class EventIntegrator:
     def _first_sign_change(self, kernels, pb, states, u):
         """Index of the first interval on which an event armed in the initial mode (``pb.mode``)
         fires: a sign change at its ends, or one :func:`may_cross` suspects inside and the
-        interval's sub-samples confirm (:meth:`_hidden_bracket`)."""
+        interval's sub-samples confirm (:meth:`_hidden_bracket`). Returns (index or None, the
+        brackets so confirmed on that interval, by event, for :meth:`_first_event` to reuse)."""
         values = kernels.samples(states, pb.grid, u, pb.context)[3]
-        grid, first = pb.grid.tolist(), None
+        grid, first, confirmed = pb.grid.tolist(), None, {}
         for e, event in enumerate(kernels.spec.events):
             d, g = event.direction, values[:, e].tolist()
             r = None if event.rate is None else np.asarray(event.rate(states), float).tolist()
@@ -146,24 +148,31 @@ class EventIntegrator:
                     continue
                 if not event.guard(states[k], grid[k], pb.context, pb.mode):
                     continue
-                if not ends and self._hidden_bracket(
+                if not ends:
+                    bracket = self._hidden_bracket(
                         kernels, e, d, states[k], grid[k], u, pb.context,
                         *self._subsamples(kernels, states[k], grid[k], grid[k + 1] - grid[k], u, pb.context,
-                                          values[k], values[k + 1])) is None:
-                    continue   # a suspicion the trajectory does not bear out: no need to step node by node
+                                          values[k], values[k + 1]))
+                    if bracket is None:
+                        continue   # a suspicion the trajectory does not bear out: no need to step node by node
+                    confirmed.setdefault(k, {})[e] = bracket
                 first = k
                 break
-        return first
+        return first, confirmed.get(first, {})
 
-    def _first_event(self, kernels, x0, t0, x1, t1, u, c, mode):
-        best = None
+    def _first_event(self, kernels, x0, t0, x1, t1, u, c, mode, known=None):
+        """The event that fires first on the interval from (t0, x0) to (t1, x1) and its time after
+        t0, or None; ``known``: brackets of hidden crossings already confirmed on it, by event."""
+        best, known = None, known or {}
         g0_all, g1_all = kernels.events(x0, t0, u, c)[0], kernels.events(x1, t1, u, c)[0]
         sub = None   # the interval's sub-samples (times, event values), computed once if needed
         for e, event in enumerate(kernels.spec.events):
             if not event.guard(x0, t0, c, mode):
                 continue
             g0, g1, d = float(g0_all[e]), float(g1_all[e]), event.direction
-            if g0 * d < 0 <= g1 * d:
+            if e in known:
+                bracket = known[e]
+            elif g0 * d < 0 <= g1 * d:
                 bracket = (0.0, t1 - t0, g0, g1)
             elif event.rate is not None and self._may_cross(g0, g1, event, x0, x1, t1 - t0, d):
                 if sub is None:
@@ -203,14 +212,14 @@ class EventIntegrator:
             k = int(np.argmin(g[:head]))
             s, f = _extremum(at, times[max(k - 1, 0)], times[min(k + 1, head - 1)], -1.0, times[-1])
             if f < 0:
-                after = times[np.searchsorted(times, s, side="right")]
-                return s, after, d * f, d * at(after)
+                after = int(np.searchsorted(times, s, side="right"))
+                return s, times[after], d * f, values[after, e]
         if len(g) - head >= 2:   # a bump inside the negative run (samples after it all negative)
             k = head + int(np.argmax(g[head:]))
             s, f = _extremum(at, times[max(k - 1, head)], times[min(k + 1, len(g) - 1)], 1.0, times[-1])
             if f >= 0:
-                before = times[np.searchsorted(times, s, side="left") - 1]
-                return before, s, d * at(before), d * f
+                before = int(np.searchsorted(times, s, side="left")) - 1
+                return times[before], s, values[before, e], d * f
         return None
 
     @staticmethod
