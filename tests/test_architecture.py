@@ -11,7 +11,7 @@ MAX_LINES = 400
 BASE = {"errors"}
 #: docs/architecture.md's table: a unit (a subpackage or a top-level module) -> what it may import
 ALLOWED = {
-    "errors": set(), "choices": set(), "console": BASE, "body": BASE,
+    "errors": set(), "choices": set(), "stop_signals": set(), "console": BASE | {"stop_signals"}, "body": BASE,
     "config_yaml": BASE, "config_paths": BASE | {"config_yaml"},
     "gait": BASE | {"body"},
     "dynamics": BASE | {"body", "choices"},
@@ -19,13 +19,14 @@ ALLOWED = {
     "kinematics": {"body"},
     "config": BASE | {"gait", "config_paths", "config_yaml", "body", "choices"},
     "control": BASE | {"kinematics", "dynamics", "solvers", "gait", "body", "choices"},
-    "walk": BASE | {"control", "kinematics", "dynamics", "solvers", "gait", "config", "console", "body", "choices"},
+    "walk": BASE | {"control", "kinematics", "dynamics", "solvers", "gait", "config", "console", "stop_signals",
+                    "body", "choices"},
     "body_motion": {"kinematics", "dynamics", "gait", "body"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
     "human_gait": BASE | {"results", "body_motion", "gait", "body"},
-    "result_files": BASE | {"results", "body_motion", "body", "package"},
-    "figures": BASE | {"result_files", "body_motion", "compare", "config_paths"},
+    "result_files": BASE | {"results", "body_motion", "body", "package", "stop_signals"},
+    "figures": BASE | {"result_files", "body_motion", "compare", "config_paths", "stop_signals"},
     "sweep": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
                      "result_files", "figures", "compare", "choices"},
     "reproduce": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",

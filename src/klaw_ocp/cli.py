@@ -15,7 +15,10 @@ Errors: every :class:`klaw_ocp.errors.KlawError` becomes one line on stderr,
 ``klaw-ocp: error: <message>``, and exit code 2. So does every command-line error argparse
 finds (an unknown option, a bad choice, a number that is not one, a missing CONFIG, an unknown
 command): one line ``klaw-ocp: error: <flag>: got <value>, allowed <...>``, no usage banner
-(:class:`KlawArgumentParser`; ``klaw-ocp COMMAND --help`` shows the usage).
+(:class:`KlawArgumentParser`; ``klaw-ocp COMMAND --help`` shows the usage). Results that cannot
+be written (an OSError: a full disk, a permission lost, a folder removed) are one line naming
+the path and the cause, exit 74; Ctrl-C and SIGTERM one line, exit 130 and 143
+(:mod:`klaw_ocp.stop_signals`).
 """
 from __future__ import annotations
 
@@ -27,9 +30,10 @@ import warnings
 from dataclasses import dataclass
 from typing import Callable
 
-from .commands import EXIT_INTERRUPTED, EXIT_USAGE, PROG
+from .commands import EXIT_USAGE, EXIT_WRITE_FAILED, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
-from .errors import ConfigError, KlawError, cut, one_line, short_repr
+from .errors import ConfigError, KlawError, ResultsNotWritten, cut, one_line, os_error_text, short_repr
+from .stop_signals import CommandSignals
 
 
 class UsageError(ConfigError):
@@ -182,28 +186,34 @@ _show_warning = warnings.showwarning
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``klaw-ocp``; returns the exit code (0 ok, 2 bad input, 3 a subphase did not converge,
-    130 Ctrl-C; :mod:`klaw_ocp.commands`)."""
+    74 the results could not be written, 130 Ctrl-C, 143 SIGTERM; :mod:`klaw_ocp.commands`)."""
     warnings.showwarning = _one_line_warning
     parser = build_parser()
     try:
-        try:
-            args = parse(parser, argv)
-        except SystemExit as exc:  # --help and --version print and exit 0
-            return exc.code if isinstance(exc.code, int) else EXIT_USAGE
-        return args.handler(args)
+        with CommandSignals():       # SIGTERM stops a command as Ctrl-C does
+            try:
+                args = parse(parser, argv)
+            except SystemExit as exc:  # --help and --version print and exit 0
+                return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+            return args.handler(args)
+    except ResultsNotWritten as exc:
+        print(f"{PROG}: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_WRITE_FAILED
     except KlawError as exc:
         message = " ".join(str(exc).split("\n"))
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:   # Ctrl-C outside a walk (the commands report their own)
-        print(f"{PROG}: interrupted (Ctrl-C)", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:   # Ctrl-C or SIGTERM the command did not report (before or after a walk)
+        return _run.report_stop(getattr(exc, "where", ""))
     except BrokenPipeError:
         # The reader (e.g. `| head`) closed the pipe: stop quietly, as the Python docs advise,
         # and keep the interpreter from failing again when it flushes stdout at exit.
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
+    except OSError as exc:    # a write outside a results folder (klaw-ocp plot's --out): the same one line
+        print(f"{PROG}: error: writing failed: {os_error_text(exc)}", file=sys.stderr)
+        return EXIT_WRITE_FAILED
 
 
 if __name__ == "__main__":  # pragma: no cover

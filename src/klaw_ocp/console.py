@@ -1,13 +1,15 @@
-"""What a walk does with the terminal: Ctrl-C waits for the end of the step, CasADi's own
-warnings are kept for summary.json instead of being printed (issue #24), and the one pause a
-first run makes, compiling the solver kernels, is announced before it starts (issue #32).
+"""What a walk does with the terminal: Ctrl-C (and SIGTERM) waits for the end of the step,
+CasADi's own warnings are kept for summary.json instead of being printed (issue #24), and the one
+pause a first run makes, compiling the solver kernels, is announced before it starts (issue #32).
 
 - :class:`DeferredInterrupt`: CasADi checks for Ctrl-C inside IPOPT and turns a KeyboardInterrupt
-  into a failed solve ("NonIpopt_Exception_Thrown", with a warning on stderr), so an interrupt
-  raised there is lost or reported as a solver failure. During a walk the first Ctrl-C only sets a
-  flag, which the walk checks between steps (:meth:`DeferredInterrupt.check`): the walk stops at
-  the end of the step it is solving (tens of milliseconds). A second Ctrl-C raises at once.
-  Only in the main thread, and only over Python's default handler (an application's own SIGINT
+  into a failed solve ("NonIpopt_Exception_Thrown", with a warning on stderr), and its wrappers
+  drop one raised while the walk builds its solver, so an interrupt raised there is lost or
+  reported as a solver failure. During a walk (from the solver's construction on) the first
+  Ctrl-C, or SIGTERM under ``klaw-ocp``, only sets a flag, which the walk checks between steps
+  (:meth:`DeferredInterrupt.check`): the walk stops at the end of the step it is solving (tens of
+  milliseconds). A second one raises at once. Only in the main thread, and only over Python's
+  default handler or the command's (:mod:`klaw_ocp.stop_signals`; an application's own SIGINT
   handler, or a worker that ignores SIGINT, is left alone).
 - :class:`CasadiMessages`: CasADi writes its warnings through Python's ``sys.stderr``
   (``CasADi - <date> <time> WARNING("...") [file:line]``); while a walk runs, those lines are
@@ -21,9 +23,10 @@ from __future__ import annotations
 import io
 import os
 import re
-import signal
 import sys
 import threading
+
+from .stop_signals import Deferred
 
 _PREFIX = "CasADi - "
 _STAMP = re.compile(r"^CasADi - \S+ \S+ ")
@@ -35,32 +38,9 @@ MAX_MESSAGES = 50
 COMPILE_ESTIMATE = "typically 3-10 s"
 
 
-class DeferredInterrupt:
-    """Context manager: Ctrl-C sets :attr:`pressed`; :meth:`check` raises KeyboardInterrupt then."""
-
-    def __init__(self):
-        self.pressed = 0
-        self._old = None
-
-    def __enter__(self) -> "DeferredInterrupt":
-        if (threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
-            self._old = signal.signal(signal.SIGINT, self._handler)
-        return self
-
-    def _handler(self, signum, frame) -> None:
-        self.pressed += 1
-        if self.pressed > 1:
-            raise KeyboardInterrupt
-
-    def check(self) -> None:
-        if self.pressed:
-            raise KeyboardInterrupt
-
-    def __exit__(self, *exc) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-            self._old = None
+class DeferredInterrupt(Deferred):
+    """Context manager: Ctrl-C or SIGTERM sets :attr:`pressed`; :meth:`check` raises
+    KeyboardInterrupt then; a second one raises at once (:class:`klaw_ocp.stop_signals.Deferred`)."""
 
 
 class CasadiMessages(io.TextIOBase):

@@ -103,6 +103,20 @@ def failure_cause(residual: float, message: str = "", iterations: int | None = N
     return "; ".join(causes)
 
 
+class ResultsNotWritten(KlawError):
+    """Writing a command's results failed (an OSError: a full disk, a permission lost, a folder
+    removed): the message names the path, the cause and where what was written is kept. The
+    command line prints it as one line and exits 74 (``klaw_ocp.commands.EXIT_WRITE_FAILED``)."""
+
+
+def os_error_text(exc: OSError) -> str:
+    """An OSError in a few words: the path (both of a rename) and the system's cause, e.g.
+    ``/tmp/out/walk.bvh: No space left on device``."""
+    cause = exc.strerror or one_line(exc) or type(exc).__name__
+    paths = [str(p) for p in (exc.filename, exc.filename2) if p is not None]
+    return f"{' -> '.join(paths)}: {cause}" if paths else cause
+
+
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C: a KeyboardInterrupt whose ``partial`` is what was completed before it: the
     :class:`~klaw_ocp.walk.Walk` of the completed steps (``status == "interrupted"``) for

@@ -37,6 +37,7 @@ from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
+from .stop_signals import cause as stop_cause
 
 
 @dataclass
@@ -149,10 +150,6 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     supported envelope)."""
     spec = _checked_spec(spec, method, progress, raise_on_failure, on_step)
     wall0, compile0 = time.perf_counter(), compile_seconds()
-    solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
-                         max_iterations=spec.max_iterations, nlp=spec.nlp)
-    gains = control_gains(spec.body, spec.attributes)
-    controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule, spec.stance)
     walk = Walk(spec)
     outside = 0.0       # seconds spent in on_step, kept out of wall_s
 
@@ -164,6 +161,13 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     interrupts, messages = DeferredInterrupt(), CasadiMessages()
     try:
         with interrupts, messages:
+            # built under the deferred Ctrl-C: CasADi's wrappers drop a KeyboardInterrupt raised
+            # while its expressions are built (the interrupt was lost, the walk went on)
+            solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
+                                 max_iterations=spec.max_iterations, nlp=spec.nlp)
+            gains = control_gains(spec.body, spec.attributes)
+            controller = StepController(spec.body, spec.attributes, gains, solver, spec.lock_rule, spec.stance)
+            interrupts.check()
             plans = list(spec.plans) + ([closing_plan(spec)] if spec.end_at_rest else [])
             if progress:
                 # a bar advanced by hand as steps complete (iterating a list of the steps would
@@ -200,7 +204,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             interrupts.check()
     except ConvergenceError as err:
         if interrupts.pressed:      # a second Ctrl-C inside IPOPT fails the solve: it is an interrupt
-            walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
+            walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()})"
             raise Interrupted(walk) from None
         walk.status, walk.message, walk.failure = "failed", str(err), err.as_dict()
         err.partial = walk
@@ -208,7 +212,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             raise
         return walk
     except KeyboardInterrupt as err:
-        walk.status, walk.message = "interrupted", "interrupted (Ctrl-C)"
+        walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()})"
         raise Interrupted(walk) from err
     finally:
         # however the walk ends (complete, failed, interrupted): before the caller sees it

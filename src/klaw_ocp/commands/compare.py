@@ -32,7 +32,8 @@ def configure(p: argparse.ArgumentParser) -> None:
                      "comparison.png to --out (default results/<name>-compare/), each solved run to "
                      "<out>/runs/, and prints the largest differences. Exit code 3 if a walk did not "
                      "converge (the others are still compared; the earlier results stay and the new "
-                     "ones are kept beside them), 130 on Ctrl-C.")
+                     "ones are kept beside them), 74 if the results cannot be written (a full disk), "
+                     "130 on Ctrl-C, 143 on SIGTERM.")
     p.epilog = ("examples:\n  klaw-ocp compare configs/natural_walk.yaml\n"
                 "  klaw-ocp compare configs/natural_walk.yaml --method multiple-shooting --stance monitored,tracking\n"
                 "  klaw-ocp compare configs/short_steps.yaml configs/long_steps.yaml\n"
@@ -130,11 +131,13 @@ def handle(args: argparse.Namespace) -> int:
             write_rendered(files, staging)
         except KeyboardInterrupt:
             return report_unfinished(staged, "interrupted", None, "every run solved (the comparison not drawn)")
-    print(comparison_table(comparison_stats(runs)))
+        stats = comparison_stats(runs)
+        if not failed:
+            staged.commit()       # in the block: a commit that cannot be written is one line too
+    print(comparison_table(stats))
     if failed:
         # the comparison is written, but of a walk that stopped early: the earlier results stay
         return report_unfinished(staged, "failed", "; ".join(failed), "every run and the comparison")
-    staged.commit()
     print(f"wrote {out / COMPARISON_CSV} and {out / COMPARISON_PNG}")
     return EXIT_OK
 

@@ -15,8 +15,9 @@ loading CasADi or matplotlib.
 
 Each step is written as it completes (:class:`klaw_ocp.result_files.run_writer.RunWriter`, the walk's
 ``on_step``) into a folder beside the results folder, which replaces it whole when the walk ends
-(:class:`klaw_ocp.result_files.results_folder.StagedFolder`); a walk that fails (exit 3) or is interrupted
-(exit 130) keeps its completed steps and leaves earlier results untouched. The helpers below
+(:class:`klaw_ocp.result_files.results_folder.StagedFolder`); a walk that fails (exit 3), is interrupted
+(Ctrl-C: exit 130, SIGTERM: 143) or cannot be written (a full disk: exit 74) keeps its completed
+steps and leaves earlier results untouched. The helpers below
 (:func:`walk_into`, :func:`finish_into`, :func:`report_unfinished`, :func:`keeping`) are shared by
 ``compare``, ``sweep`` and ``reproduce``; docs/experiments.md has the rules.
 """
@@ -30,7 +31,8 @@ from pathlib import Path
 from .. import choices
 from ..errors import one_line
 from ..result_files.registry import RUN_FILES
-from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
+from ..stop_signals import cause as stop_cause
+from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, EXIT_TERMINATED, PROG
 from ._common import add_set_option, check_output_dir, load, resolved_header
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
@@ -47,8 +49,8 @@ def configure_run(p: argparse.ArgumentParser) -> None:
                      "results/<name>/). Each step is written as it completes, into a folder beside --out "
                      "that replaces the earlier results when the walk ends. A subphase that does not "
                      "converge is reported on one line (step, subphase, residual, cause) and exits 3; "
-                     "Ctrl-C exits 130; either way the completed steps are kept, and earlier results "
-                     "stay untouched.")
+                     "results that cannot be written (a full disk) exit 74, Ctrl-C 130, SIGTERM 143; "
+                     "either way the completed steps are kept, and earlier results stay untouched.")
     p.epilog = ("example: klaw-ocp run configs/natural_walk.yaml --set walk.speed=4 "
                 "--method plain-shooting --out /tmp/slow")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
@@ -88,13 +90,15 @@ def handle_run(args: argparse.Namespace) -> int:
     from ..walk import walk_spec
     staged = StagedFolder(out, "run", force=args.force)        # refused here, before any solving
     header = resolved_header(args.config, args.sets, args.method, args.stance, args.fps)
-    writer = RunWriter(staged.open(), config.resolved_yaml(header))     # the walk carries output.fps
-    with keeping(staged, lambda: f"{len(writer.done)} completed step(s)"):
+    writer = None
+    with keeping(staged, lambda: f"{len(writer.done) if writer else 0} completed step(s)",
+                 lambda text: writer and writer.record_write_error(text)):
+        writer = RunWriter(staged.open(), config.resolved_yaml(header))     # the walk carries output.fps
         walk, outcome, failure = walk_into(writer, walk_spec(config), quiet=args.quiet)
         paths, times, outcome, _ = finish_into(writer, walk, outcome, plots=plots, animation=animation)
-    if outcome != "ok":
-        return report_unfinished(staged, outcome, failure, f"{len(walk.steps)} completed step(s)")
-    staged.commit()
+        if outcome != "ok":
+            return report_unfinished(staged, outcome, failure, f"{len(walk.steps)} completed step(s)")
+        staged.commit()
     rtf = walk.duration / walk.wall_s if walk.wall_s else float("inf")
     n_plots = sum(path.parent.name == PLOTS_DIR for path in paths.values())
     plots = f"; {n_plots} plots in {times['plots']:.2f} s" if times["plots"] is not None else ""
@@ -124,17 +128,20 @@ def walk_into(writer, spec, quiet: bool = True):
     except KeyboardInterrupt as exc:      # klaw_ocp.errors.Interrupted, or Ctrl-C before the first step
         walk = getattr(exc, "partial", None)
         if walk is None:
-            walk = Walk(spec, status="interrupted", message="interrupted (Ctrl-C)")
+            walk = Walk(spec, status="interrupted", message=f"interrupted ({stop_cause()})")
         return walk, "interrupted", None
 
 
 def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool = False):
     """:meth:`RunWriter.finish` of a walk that ended with ``outcome`` (an interrupted one without
-    plots or walk.gif); Ctrl-C while it writes makes the run "interrupted" and writes the summary
-    only. Returns (paths, times, outcome, the walk's RunData or None if interrupted here)."""
+    plots or walk.gif), the plots and walk.gif, then the final summary.json, last (a summary
+    saying "ok" comes with every file); Ctrl-C or SIGTERM while it writes makes the run
+    "interrupted" and writes the summary only. Returns (paths, times, outcome, the walk's RunData
+    or None if interrupted here)."""
+    from ..stop_signals import requested
     interrupted = outcome == "interrupted"
     try:
-        paths, run = writer.finish(walk)
+        paths, run = writer.finish(walk, summary=False)
         times = {"plots": None, "animation": None}
         drawing = not interrupted and bool(walk.steps)
         plots, animation = plots and drawing, animation and drawing
@@ -143,9 +150,14 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
             drawn, times = render_outputs(run, writer.folder / PLOTS_DIR if plots else None,
                                           writer.folder / GIF_FILE if animation else None)
             paths.update(drawn)
+        if outcome == "ok" and requested():
+            # a stop signal that never surfaced (CasADi's wrappers drop a KeyboardInterrupt raised
+            # inside them): the run still ends as interrupted, as the user asked
+            raise KeyboardInterrupt
+        paths["summary"] = writer.write_summary(run.summary)
         return paths, times, outcome, run
     except KeyboardInterrupt:
-        walk.status, walk.message = "interrupted", "interrupted (Ctrl-C) while writing the results"
+        walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()}) while writing the results"
         try:
             writer.finish(walk, body=False)
         except KeyboardInterrupt:
@@ -154,38 +166,70 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
 
 
 @contextmanager
-def keeping(staged, what):
-    """Any other exception (a bug, a full disk): keep what was written as a failed run keeps it,
-    say where on one line, and let the exception go on (with its traceback). ``what()`` says how
-    much was written. A KlawError (bad input found late, e.g. a sweep's grid) goes on to its own
-    one line, what was written kept without a word."""
-    from ..errors import KlawError
+def keeping(staged, what, on_write_error=None):
+    """Whatever else ends the command in the block keeps what was written, as a failed run keeps
+    it (the earlier results untouched); ``what()`` says how much was written:
+
+    - an OSError (a full disk, a permission lost, a folder removed): ``on_write_error(text)``
+      records it (a run's summary.json: "incomplete"), then :class:`~klaw_ocp.errors.ResultsNotWritten`,
+      one line naming the path, the cause and where the results are (exit 74);
+    - a stop signal the command did not report itself: :class:`~klaw_ocp.errors.Interrupted`
+      whose ``where`` says where the results are (:func:`klaw_ocp.cli.main`'s one line, 130 or 143);
+    - a KlawError (bad input found late, e.g. a sweep's grid): on to its own one line, what was
+      written kept without a word;
+    - anything else (a bug): one line saying where, and the exception goes on with its traceback."""
+    from ..errors import Interrupted, KlawError, ResultsNotWritten, os_error_text
     try:
         yield
     except KlawError:
         staged.keep()
         raise
+    except BrokenPipeError:      # stdout's reader went away (`| head`): klaw_ocp.cli ends quietly
+        staged.keep()
+        raise
+    except OSError as exc:
+        text, staging = os_error_text(exc), staged.path
+        if on_write_error is not None:
+            on_write_error(text)
+        where = kept_where(staged, what())
+        if staging is not None and staged.kept is not None:     # the file as it is named now
+            text = text.replace(str(staging), str(staged.kept))
+        raise ResultsNotWritten(f"writing the results failed: {text}; {where}") from None
+    except KeyboardInterrupt as exc:
+        stopped = Interrupted(getattr(exc, "partial", None))
+        stopped.where = kept_where(staged, what())
+        raise stopped from None
     except Exception as exc:
-        from ..result_files.results_folder import kept_phrase
-        kept = staged.keep()
-        where = kept_phrase(kept, staged) if kept is None else f"{what()} {kept_phrase(kept, staged)}"
+        where = kept_where(staged, what())
         text = one_line(exc)[:200]
         print(f"{PROG}: error: unexpected {type(exc).__name__}" + (f" ({text})" if text else "") + f"; {where}",
               file=sys.stderr)
         raise
 
 
+def kept_where(staged, what: str) -> str:
+    """Keep what ``staged`` holds; the words that say where it is (``what``: how much it is)."""
+    from ..result_files.results_folder import kept_phrase
+    kept = staged.keep()
+    return kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
+
+
 def report_unfinished(staged, outcome: str, failure, what: str) -> int:
     """Keep the results of a command that failed (``failure``: the ConvergenceError, or a
     sentence) or was interrupted, print its one line and return its exit code."""
-    from ..result_files.results_folder import kept_phrase
-    kept = staged.keep()
-    where = kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
+    where = kept_where(staged, what)
     if outcome == "failed":
         print(f"{PROG}: error: {failure_sentence(failure)}; {where}", file=sys.stderr)
         return EXIT_SOLVER_FAILED
-    print(f"{PROG}: interrupted (Ctrl-C); {where}", file=sys.stderr)
-    return EXIT_INTERRUPTED
+    return report_stop(where)
+
+
+def report_stop(where: str = "") -> int:
+    """The one line of a command stopped by Ctrl-C or SIGTERM (``where``: where its results are)
+    and its exit code: 130 for Ctrl-C, 143 for SIGTERM (128 + the signal's number)."""
+    from ..stop_signals import terminated
+    print(f"{PROG}: interrupted ({stop_cause()})" + (f"; {where}" if where else ""), file=sys.stderr)
+    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
 
 
 def failure_sentence(failure) -> str:

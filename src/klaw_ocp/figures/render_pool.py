@@ -17,14 +17,24 @@ the usual order, and writes walk.gif atomically itself (:func:`write_animation`)
 A task's exception is raised here as if it had been drawn in this process. With one core, no
 forkserver, a single output or a pool that cannot start (or breaks), everything is drawn in this
 process, one after the other, as before.
+
+Ctrl-C and SIGTERM are answered by this process alone (issue #37): the forkserver is started with
+SIGINT blocked, so that it and every worker it forks never see the Ctrl-C the terminal sends to
+each process of the job (a worker stopped while it unpickled its data printed a traceback); a
+stop signal waits while the workers are started; when the drawing is stopped, the workers are
+ended at once (SIGTERM, silent) and a walk.gif they left half written is removed; and the
+forkserver is ended when this process exits (:func:`stop_server`): no process is left behind.
 """
 from __future__ import annotations
 
+import contextlib
 import gc
 import os
+import signal
 import time
 
 from ..result_files.registry import RUN_FILES
+from ..stop_signals import Deferred, blocked, deferred
 from .registry import GIF_TASK, PLOTS, cost_order, figure_modules
 
 #: walk.gif's function, ``(run, path) -> path or None``
@@ -60,10 +70,67 @@ def prewarm() -> None:
     that cannot start only means drawing here later."""
     try:
         if _forkserver_context() is not None:
-            from multiprocessing import forkserver
-            forkserver.ensure_running()
+            _start_server()
     except (OSError, ValueError):
         pass
+
+
+def _start_server() -> None:
+    """The forkserver, started (if it is not) with SIGINT blocked: it keeps that mask, and so does
+    every worker it forks, which then never sees Ctrl-C, from its first instruction on. It is
+    ended when this process exits (:func:`stop_server`)."""
+    from multiprocessing import forkserver, resource_tracker
+    global _STOP_REGISTERED
+    # the tracker first: its own start unblocks SIGINT afterwards, whatever the mask was
+    resource_tracker.ensure_running()
+    with blocked():
+        forkserver.ensure_running()
+    if not _STOP_REGISTERED:
+        import atexit
+        atexit.register(stop_server)
+        _adopt_orphans()
+        _STOP_REGISTERED = True
+
+
+def _adopt_orphans() -> None:
+    """Make this process the one that reaps the workers if the forkserver dies before them (a
+    SIGTERM to the whole job ends every process at once): :func:`stop_server` reaps them, where
+    they would otherwise wait as zombies for the system's init (Linux; elsewhere nothing)."""
+    with contextlib.suppress(Exception):
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)     # PR_SET_CHILD_SUBREAPER
+
+
+_STOP_REGISTERED = False
+
+
+def stop_server() -> None:
+    """End the forkserver this process started, and multiprocessing's resource tracker, now and
+    reaped here, rather than when they notice this process has gone (the forkserver only looks
+    once it has imported matplotlib, a second or two after it started): a command stopped early
+    left them behind, as processes or as zombies of the system's init. Never fails, never waits
+    more than a few seconds."""
+    from multiprocessing import forkserver, resource_tracker
+    server = forkserver._forkserver                                        # noqa: SLF001
+    with contextlib.suppress(Exception):
+        pid = getattr(server, "_forkserver_pid", None)
+        if pid is not None:
+            os.kill(pid, signal.SIGTERM)         # at once, even in the middle of its imports
+            server._stop()                       # noqa: SLF001 - closes its pipe and reaps it
+    tracker = resource_tracker._resource_tracker                           # noqa: SLF001
+    fd, pid = getattr(tracker, "_fd", None), getattr(tracker, "_pid", None)
+    if fd is None or pid is None:
+        return
+    with contextlib.suppress(Exception):
+        os.close(fd)                             # its pipe closed: it ends (it ignores signals)
+        tracker._fd = tracker._pid = None                                   # noqa: SLF001
+        for _ in range(100):
+            if os.waitpid(pid, os.WNOHANG)[0]:
+                break
+            time.sleep(0.05)
+    with contextlib.suppress(ChildProcessError):      # the workers adopted (_adopt_orphans), if ended
+        while os.waitpid(-1, os.WNOHANG)[0]:
+            pass
 
 
 def render_outputs(run, plots_dir=None, gif_path=None) -> tuple[dict, dict]:
@@ -111,7 +178,11 @@ def _in_pool(run, tasks: list, gif_path, start: float) -> dict | None:
                                initializer=_receive, initargs=(run,))
     try:
         try:
-            futures = {pool.submit(_draw_here, task, gif_path): task for task in tasks}
+            # the workers start whole: one handed half its data (Ctrl-C in the middle of the pipe
+            # write) printed a traceback; the signal is acted on once they are all started
+            with deferred():
+                _start_server()
+                futures = {pool.submit(_draw_here, task, gif_path): task for task in tasks}
         except (OSError, BrokenProcessPool):         # no worker could be started
             return None
         done = {}
@@ -122,13 +193,37 @@ def _in_pool(run, tasks: list, gif_path, start: float) -> dict | None:
                 return None
             done[futures[future]] = (result, time.perf_counter() - start)
         return done
+    except BaseException:        # Ctrl-C, SIGTERM, a task's error: the workers stop now, not at their task's end
+        with Deferred(second_raises=False):          # the clean-up is not cut short either
+            _end_workers(pool, gif_path)
+        raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _end_workers(pool, gif_path) -> None:
+    """End ``pool``'s workers at once (SIGTERM: their default, silent end) and remove the
+    temporary walk.gif one of them left (it was being written when it ended)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())     # noqa: SLF001
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.terminate()
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join()
+    if gif_path is not None:
+        from pathlib import Path
+        for tmp in Path(gif_path).parent.glob(f".{Path(gif_path).name}.*"):    # atomic_path's temporary
+            with contextlib.suppress(OSError):
+                tmp.unlink()
 
 
 def _receive(run) -> None:
     global _RUN
     _RUN = run
+    # belt and braces for a forkserver started by someone else, unmasked: Ctrl-C is the main
+    # process's to answer
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _draw_here(task: str, gif_path):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 import tempfile
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 
@@ -16,21 +16,38 @@ def _umask() -> int:
 
 
 @contextmanager
+def naming(path):
+    """An OSError raised in the block names ``path`` if it names no file: a write, a flush or a
+    close that fails (a full disk) does not say which file, and the user's one line should."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None:
+            exc.filename = os.fspath(path)
+        raise
+
+
+@contextmanager
 def atomic_path(path: Path, suffix: str = ".tmp"):
     """A temporary path in ``path``'s folder to write the file into; when the block ends, the file
     gets the user's normal mode (mkstemp makes it 0600) and is renamed to ``path``, so that a reader
-    never sees a half-written file; if the block raises, the temporary is removed."""
+    never sees a half-written file; if the block raises, the temporary is removed. An OSError names
+    ``path`` (not the temporary)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
-    os.close(fd)
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+        os.close(fd)
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    except BaseException as exc:
+        if tmp is not None:
+            with suppress(OSError):          # a folder removed meanwhile has no temporary left
+                os.unlink(tmp)
+        if isinstance(exc, OSError) and (exc.filename is None or os.fspath(exc.filename) == tmp):
+            exc.filename, exc.filename2 = os.fspath(path), None
         raise
 
 

@@ -35,12 +35,11 @@ import itertools
 import json
 import os
 import shutil
-import signal
-import threading
 import time
 from pathlib import Path
 
 from ..errors import KlawError
+from ..stop_signals import Deferred
 from .registry import COMMAND_FOLDERS, KEY_FILES, MARKER
 
 #: Files that desktops and the atomic writes leave anywhere; they never make a folder foreign.
@@ -141,20 +140,6 @@ def mark_folder(folder, command: str) -> None:
     atomic_write_text(Path(folder) / MARKER, json.dumps(marker, indent=2) + "\n")
 
 
-@contextlib.contextmanager
-def _deferred_interrupt():
-    """Ctrl-C waits until the block is done (the swap of two folders is never left half done);
-    a no-op off the main thread and where signals cannot be blocked."""
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
 class StagedFolder:
     """The results folder ``out`` of ``command``, checked now, written beside it, swapped in at
     the end (see the module docstring). A refusal names ``--out``, the option of every command
@@ -176,6 +161,8 @@ class StagedFolder:
                                     f"did not write ({why}); choose another folder, or add --force to write "
                                     f"into it (its other files are kept)")
         self.path: Path | None = None
+        #: where :meth:`keep` left the results (None: nowhere, nothing written)
+        self.kept: Path | None = None
 
     # -- writing ---------------------------------------------------------------------------------
     def open(self) -> Path:
@@ -205,7 +192,9 @@ class StagedFolder:
         """The command ended well: the new folder replaces the earlier one whole (with
         ``--force`` on a foreign folder: its files are moved into it). Returns ``out``."""
         self._write_marker()
-        with _deferred_interrupt():
+        # Ctrl-C and SIGTERM wait: two folders are never left half swapped (and the command, done,
+        # ends as done: its results are whole)
+        with Deferred(second_raises=False):
             state, why = inspect_folder(self.target, self.command)
             if state == "foreign" and not self.force:     # it changed while the command ran
                 kept, self.path = self.shown(self.path), None
@@ -251,23 +240,38 @@ class StagedFolder:
         folder. Returns where it is: ``out`` when there was no earlier folder (the partial
         results took its place), else the ``.partial-`` folder beside it; None when nothing had
         been written (the empty staging folder is removed)."""
+        self.kept = self._keep()
+        return self.kept
+
+    def _keep(self) -> Path | None:
         if self.path is None or not self.path.is_dir():
+            self.path = None
             return None
-        with _deferred_interrupt():
-            if not any(self.path.iterdir()):
-                self.path.rmdir()
-                self.path = None
-                return None
-            self._write_marker()
+        # it runs when writing has just failed (a full disk, a folder removed): each step that
+        # fails leaves the results where they are, under their .partial- name; a stop signal
+        # waits (the command is ending: it says where its results are)
+        with Deferred(second_raises=False):
+            try:
+                if not any(self.path.iterdir()):
+                    self.path.rmdir()
+                    self.path = None
+                    return None
+            except OSError:
+                pass
+            with contextlib.suppress(OSError):     # without its marker the folder is still ours (its files)
+                self._write_marker()
             state, _ = inspect_folder(self.target, self.command)
             if state in ("missing", "empty"):
-                if state == "empty":
-                    os.rmdir(self.target)
-                os.rename(self.path, self.target)
-                self.path = None
-                return self.out
+                try:
+                    if state == "empty":
+                        os.rmdir(self.target)
+                    os.rename(self.path, self.target)
+                    self.path = None
+                    return self.out
+                except OSError:
+                    pass
         kept, self.path = self.shown(self.path), None
-        return kept
+        return kept if kept.is_dir() else None
 
     def shown(self, path: Path) -> Path:
         """``path`` (beside ``out``) as the user would name it: beside ``out`` as typed."""

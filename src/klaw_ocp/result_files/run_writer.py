@@ -15,12 +15,15 @@ completed step it
 These per-step writes skip the fsync of :func:`~klaw_ocp.result_files.atomic.atomic_write_bytes` (they are
 safe against a crash of the process, and the next step rewrites them anyway); they cost about 1 ms
 a step beside the 15-20 ms of the natural walk's solve (docs/experiments.md). :meth:`RunWriter.finish`
-then writes the final ``summary.json`` (indented; ``status`` "ok", "failed" with its ``failure``,
-or "interrupted") and ``events.csv`` durably, and the files that need the whole walk: the body's
+then writes ``events.csv`` durably and the files that need the whole walk: the body's
 (``angles.csv``, ``walk.bvh``, ``walk.mot``: the last stance leg is completed by the next step's
-double support), at the walk's own frame rate (``output.fps``); the caller then draws the plots
-and ``walk.gif``. A crash between steps leaves the completed steps on disk with ``status:
-"running"``. Every file name is the registry's (:mod:`.registry`).
+double support), at the walk's own frame rate (``output.fps``); the caller draws the plots and
+``walk.gif``; the final ``summary.json`` (indented; ``status`` "ok", "failed" with its ``failure``,
+or "interrupted") is written last, so that a summary saying "ok" comes with every file. A crash
+between steps leaves the completed steps on disk with ``status: "running"``; a write that fails
+(a full disk) leaves "running", or "incomplete" with the path and the cause if the summary can
+still be written (:meth:`RunWriter.record_write_error`). Every file name is the registry's
+(:mod:`.registry`).
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..results import COLUMNS, step_hip_offsets, mean_hip_speed_kmh, step_summary, step_table, summary_of
-from .atomic import atomic_write_bytes, write_rendered
+from .atomic import atomic_write_bytes, naming, write_rendered
 from .registry import RUN_FILES
 from .render import body_keys, render_run
 from .summary_json import summary_text
@@ -53,6 +56,7 @@ class RunWriter:
         #: per written step: (table, summary entry, its JSON text, dynamics.csv's size after it)
         self.done: list[tuple] = []
         self.step_s = 0.0          # time spent writing the steps (the benchmark's "per-step writing")
+        self._walk = None          # the walk last written (for record_write_error)
         self._events: list = []    # the foot events in events.csv
         if resolved_yaml is not None:
             atomic_write_bytes(self.folder / RESOLVED_FILE, resolved_yaml.encode("utf-8"))
@@ -64,6 +68,7 @@ class RunWriter:
     def step(self, walk) -> None:
         """Write every completed step of ``walk`` not written yet, then the summary so far."""
         t0 = time.perf_counter()
+        self._walk = walk
         self._catch_up(walk)
         summary = self._summary(walk, status="running")
         self._write_events(summary["events"])
@@ -75,7 +80,7 @@ class RunWriter:
         path, n = self.folder / EVENTS_FILE, len(self._events)
         if n and events[:n] == self._events and path.is_file():
             rows = events_csv({"events": events[n:]}).split("\n", 1)[1]       # without the header
-            with open(path, "a", encoding="utf-8", newline="") as handle:
+            with naming(path), open(path, "a", encoding="utf-8", newline="") as handle:
                 handle.write(rows)
         else:
             atomic_write_bytes(path, events_csv({"events": events}).encode("utf-8"), durable=False)
@@ -94,15 +99,16 @@ class RunWriter:
         """Append ``data`` after the rows written so far (an append an interrupt cut short is
         overwritten); returns the file's size after it."""
         start = self.done[-1][3] if self.done else self._header_size
-        fd = os.open(self.folder / DYNAMICS_FILE, os.O_WRONLY)
-        try:
-            os.lseek(fd, start, os.SEEK_SET)
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
-            os.ftruncate(fd, start + len(data))
-        finally:
-            os.close(fd)
+        with naming(self.folder / DYNAMICS_FILE):
+            fd = os.open(self.folder / DYNAMICS_FILE, os.O_WRONLY)
+            try:
+                os.lseek(fd, start, os.SEEK_SET)
+                view = memoryview(data)
+                while view:
+                    view = view[os.write(fd, view):]
+                os.ftruncate(fd, start + len(data))
+            finally:
+                os.close(fd)
         return start + len(data)
 
     def _summary(self, walk, status: str | None = None) -> dict:
@@ -119,27 +125,52 @@ class RunWriter:
             return {c: np.array([], dtype=str if c == "subphase" else float) for c in COLUMNS}
         return {c: np.concatenate([d[0][c] for d in self.done]) for c in COLUMNS}
 
-    def finish(self, walk, body: bool = True):
-        """Write the rest of the run: any step not written yet, the final summary and events
-        (durably), with ``body`` angles.csv, walk.bvh and walk.mot. Returns the paths by name and
-        the RunData of the walk (the plots and walk.gif are drawn from it:
+    def finish(self, walk, body: bool = True, summary: bool = True):
+        """Write the rest of the run: any step not written yet, the final events (durably), with
+        ``body`` angles.csv, walk.bvh and walk.mot, and last, with ``summary``, the final summary
+        (durably; without it the caller writes it with :meth:`write_summary` once the plots are
+        drawn): a folder whose summary says "ok" has every file. Returns the paths by name and the
+        RunData of the walk (the plots and walk.gif are drawn from it:
         :func:`klaw_ocp.figures.render_pool.render_outputs`)."""
         from .run_data import RunData
         self._catch_up(walk)
+        self._walk = walk
         path = self.folder / DYNAMICS_FILE
-        with open(path, "rb+") as handle:     # the rows of the written steps, durably
+        with naming(path), open(path, "rb+") as handle:     # the rows of the written steps, durably
             handle.truncate(self.done[-1][3] if self.done else self._header_size)
             os.fsync(handle.fileno())
-        summary = self._summary(walk)
-        paths = {"dynamics": path, "summary": self.folder / SUMMARY_FILE, "events": self.folder / EVENTS_FILE}
-        atomic_write_bytes(paths["summary"], summary_text(summary).encode("utf-8"))
-        atomic_write_bytes(paths["events"], events_csv(summary).encode("utf-8"))
-        self._events = summary["events"]
+        final = self._summary(walk)
+        paths = {"dynamics": path, "events": self.folder / EVENTS_FILE}
+        atomic_write_bytes(paths["events"], events_csv(final).encode("utf-8"))
+        self._events = final["events"]
         if (self.folder / RESOLVED_FILE).exists():
             paths["resolved"] = self.folder / RESOLVED_FILE
         table = self.table()
-        run = RunData.from_walk(walk, table=table, summary=summary) if body else \
-            RunData(name=walk.spec.name, summary=summary, table=table, fps=walk.spec.fps)
+        run = RunData.from_walk(walk, table=table, summary=final) if body else \
+            RunData(name=walk.spec.name, summary=final, table=table, fps=walk.spec.fps)
         if body:
             paths.update(write_rendered(render_run(run, body_keys()), self.folder))
+        if summary:
+            paths["summary"] = self.write_summary(final)
         return paths, run
+
+    def write_summary(self, summary: dict) -> Path:
+        """The final summary.json (indented, durably); returns its path."""
+        path = self.folder / SUMMARY_FILE
+        atomic_write_bytes(path, summary_text(summary).encode("utf-8"))
+        return path
+
+    def record_write_error(self, text: str) -> None:
+        """Writing the run failed (``text``: the path and the cause): summary.json says so, if it
+        still can be written: status "incomplete", ``message`` the failure (the walk's own
+        ``failure``, if any, kept). Never raises: on a full disk the earlier summary stays, its
+        status "running"; either way no summary claims "ok" for files the folder lacks."""
+        walk = self._walk
+        if walk is None or not self.folder.is_dir():      # a folder removed is not made again
+            return
+        summary = self._summary(walk)
+        summary["status"], summary["message"] = "incomplete", f"writing the results failed: {text}"
+        try:
+            atomic_write_bytes(self.folder / SUMMARY_FILE, summary_text(summary).encode("utf-8"))
+        except Exception:   # noqa: BLE001 - the first failure is the one to report
+            pass
