@@ -4,22 +4,24 @@ A sweep takes one experiment mapping (a YAML file or a dict) and, for every dott
 to vary, a list of values. The grid is their Cartesian product in the order given (the first
 path varies slowest); each combination is validated like a config file
 (:meth:`klaw_ocp.config.ExperimentConfig.from_mapping`) before any walk starts, and then walked
-with one or both solver modes. Walks run in this process (``workers=1``), on a local process pool
-('spawn' context: CasADi objects never cross a fork), or on a dask.distributed cluster; the same
-``concurrent.futures`` interface drives all three. Only plain dicts and strings cross process
-boundaries: a worker gets ``(mapping, method)`` and returns one row as a dict
+with one or both solver modes. Walks run in this process (``workers=1``), on local worker
+processes ('spawn': CasADi objects never cross a fork) or on a dask.distributed cluster
+(:mod:`klaw_ocp.sweep_pool`, where a worker that dies loses only the walk it was running). Only
+plain dicts and strings cross process boundaries: a worker gets ``(mapping, method)`` and returns one row as a dict
 (:func:`run_walk`); each worker process builds its CasADi Functions once (they are cached per
 process) and reuses them for every walk it gets.
 
 One walk that does not converge never stops the sweep: its row has ``status`` "failed" and
 names the failing step, subphase and residual; any other exception gives ``status`` "error"
-and its one-line message. :func:`write_sweep` writes ``sweep.csv`` (columns:
+and its one-line message; a walk whose worker process died, ``status`` "lost" and the cause.
+:func:`write_sweep` writes ``sweep.csv`` (columns:
 :data:`RESULT_COLUMNS` after one column per varied path) and the map ``sweep.png``
 (:mod:`klaw_ocp.figures.sweep_plot`). docs/sweep.md has the user's view.
 The `--vary` values are parsed by :mod:`klaw_ocp.config_paths` (the syntax `--set` shares).
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import itertools
 import math
@@ -41,7 +43,8 @@ FORCE_COLUMNS = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 RESULT_COLUMNS = ("method", "status", "failed_step", "failed_subphase", "residual", "steps", "iterations",
                   "wall_s", "build_s", "compile_s", "max_subphase_s", "mean_speed_kmh", "hip_excursion_m", *(f"peak_{c}" for c in FORCE_COLUMNS),
                   "fallbacks", "message")
-STATUSES = ("ok", "failed", "error")
+#: "lost": the worker process running the walk died (docs/sweep.md, "When a worker dies")
+STATUSES = ("ok", "failed", "error", "lost")
 
 # ---------------------------------------------------------------------------- grid, validation
 
@@ -188,33 +191,6 @@ def _one_line(exc: BaseException, prefix: str = "") -> str:
 
 # ------------------------------------------------------------------------------------ executors
 
-def _ignore_interrupts() -> None:
-    """A local worker leaves Ctrl-C to the sweep's own process, which stops handing out walks and
-    keeps the rows of the walks already running (no traceback from every worker)."""
-    import signal
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _executor(workers: int, n_tasks: int, address: str | None):
-    """A concurrent.futures executor and the dask client behind it (None for the local pool)."""
-    if address is None:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-        context = multiprocessing.get_context("spawn")  # never fork a process that holds CasADi objects
-        return ProcessPoolExecutor(max_workers=min(workers, n_tasks), mp_context=context,
-                                   initializer=_ignore_interrupts), None
-    try:
-        from distributed import Client
-    except ImportError:
-        raise KlawError('--scheduler needs dask.distributed, which is not installed: '
-                        'pip install -e ".[cluster]"') from None
-    try:
-        client = Client(address)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise KlawError(f"--scheduler: could not connect to {address!r}: {_one_line(exc)}") from None
-    return client.get_executor(pure=False), client
-
-
 def run_sweep(config, vary: dict, methods=None, workers: int | None = None, scheduler: str | None = None,
               progress: bool = False, on_row=None) -> list[dict]:
     """Walk every combination of ``vary`` (path -> list of values) with ``methods``.
@@ -225,9 +201,15 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     cluster's business). Every combination is validated first. Returns one row per walk and
     method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(row)``, if
     given, is called after each walk with its row, in the order the walks finish: ``klaw-ocp
-    sweep`` appends it to sweep.csv there. Ctrl-C raises :class:`~klaw_ocp.errors.Interrupted` whose
-    ``partial`` is the rows finished (the walks running in local workers are waited for).
+    sweep`` appends it to sweep.csv there. A walk whose worker process died has ``status``
+    "lost" (:mod:`klaw_ocp.sweep_pool`). Ctrl-C or SIGTERM raises
+    :class:`~klaw_ocp.errors.Interrupted` whose ``partial`` is the rows finished; the walks
+    running are abandoned, their workers killed (SIGTERM: its ``__cause__`` is a
+    :class:`~klaw_ocp.sweep_pool.Terminated`). Any other exception (``on_row`` could not write)
+    also kills the workers before it goes on.
     """
+    from .sweep_pool import TerminateRaises, run_jobs
+
     _, tasks = expand(config, vary, methods)
     workers = (os.cpu_count() or 1) if workers is None else workers
     if scheduler is None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
@@ -245,21 +227,25 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
         if on_row is not None:
             on_row(results[i])
 
+    def unfinished(i: int, status: str, message: str, wall_s=None) -> None:
+        done(i, {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": status,
+                 "wall_s": wall_s, "message": message})
+
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:
-        if scheduler is None and (workers == 1 or len(tasks) == 1):
-            for i, task in enumerate(tasks):
-                done(i, run_walk(task["mapping"], task["method"]))
-        else:
-            if scheduler is None:
-                _compile_here_first(tasks)
-            executor, client = _executor(workers, len(tasks), scheduler)
-            try:
-                _run_on(executor, tasks, done)
-            finally:
-                executor.shutdown(wait=True)
-                if client is not None:
-                    client.close()
+        with TerminateRaises() as terminate:
+            if scheduler is None and (workers == 1 or len(tasks) == 1):
+                for i, task in enumerate(tasks):
+                    row = run_walk(task["mapping"], task["method"])
+                    terminate.check()          # a SIGTERM its solver swallowed: the row is not the walk's
+                    done(i, row)
+            else:
+                if scheduler is None:
+                    _compile_here_first(tasks)
+                run_jobs(run_walk, [(task["mapping"], task["method"]) for task in tasks],
+                         on_done=done, on_error=lambda i, text: unfinished(i, "error", text),
+                         on_lost=lambda i, cause, wall_s: unfinished(i, "lost", cause, wall_s),
+                         workers=workers, scheduler=scheduler)
     except KeyboardInterrupt as err:
         raise Interrupted(finished()) from err
     finally:
@@ -288,40 +274,10 @@ def _compile_here_first(tasks: list[dict]) -> None:
             prepare_kernels(make_solver(key[0], intervals=key[1]), key[2])
 
 
-def _run_on(executor, tasks: list[dict], done) -> None:
-    from concurrent.futures import as_completed
-
-    futures = {executor.submit(run_walk, task["mapping"], task["method"]): i for i, task in enumerate(tasks)}
-
-    def result(future, i):
-        try:
-            return future.result()
-        except Exception as exc:  # noqa: BLE001 - a worker process died or the cluster lost the task
-            return {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": "error",
-                    "message": _one_line(exc, f"worker: {type(exc).__name__}")}
-
-    seen = set()
-    try:
-        for future in as_completed(futures):
-            done(futures[future], result(future, futures[future]))
-            seen.add(future)
-    except BaseException:  # Ctrl-C: drop the walks not started yet, keep the rows of those running
-        for future in futures:
-            future.cancel()
-        for future, i in futures.items():
-            if future not in seen and not future.cancelled():
-                try:
-                    row = result(future, i)      # waits for the walk (its worker ignores Ctrl-C)
-                except BaseException:            # noqa: BLE001 - Ctrl-C again: stop waiting
-                    break
-                done(i, row)
-        raise
-
-
 # ---------------------------------------------------------------------------------- the files
 
 def counts(rows: list[dict]) -> dict[str, int]:
-    """Walks per status: {"ok": .., "failed": .., "error": ..}."""
+    """Walks per status: {"ok": .., "failed": .., "error": .., "lost": ..}."""
     return {status: sum(row["status"] == status for row in rows) for status in STATUSES}
 
 
@@ -354,8 +310,10 @@ def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = Non
 
     out = Path(out_dir)
     paths = {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}
-    atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
-    write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
+    with naming(paths["csv"]):
+        atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
+    with naming(paths["png"]):
+        write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
     return paths
 
 
@@ -372,16 +330,30 @@ def append_sweep_row(path, row: dict, varied_paths) -> None:
     from .result_files.atomic import atomic_write_text
 
     path = Path(path)
-    if not path.is_file():
-        atomic_write_text(path, sweep_csv([row], list(varied_paths)))
-        return
-    with open(path, "a", encoding="utf-8", newline="") as handle:
-        handle.write(sweep_csv([row], list(varied_paths), header=False))
-        handle.flush()
-        os.fsync(handle.fileno())
+    with naming(path):
+        if not path.is_file():
+            atomic_write_text(path, sweep_csv([row], list(varied_paths)))
+            return
+        with open(path, "a", encoding="utf-8", newline="") as handle:
+            handle.write(sweep_csv([row], list(varied_paths), header=False))
+            handle.flush()
+            os.fsync(handle.fileno())
 
 
 def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:
     n = counts(rows)
-    return (f"{len(rows)} walks: {n['ok']} ok, {n['failed']} failed, {n['error']} error; "
+    lost = f", {n['lost']} lost" if n["lost"] else ""
+    return (f"{len(rows)} walks: {n['ok']} ok, {n['failed']} failed, {n['error']} error{lost}; "
             f"wrote {paths['csv']} and {paths['png']}")
+
+
+@contextlib.contextmanager
+def naming(path):
+    """An OSError raised in the block names ``path`` when it names no file (a write or an fsync
+    that fails on a full disk does not say which file), so that its one line can."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None:
+            exc.filename = os.fspath(path)
+        raise

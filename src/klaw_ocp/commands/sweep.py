@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from .. import choices
-from ..errors import ConfigError
-from . import EXIT_OK, EXIT_SOLVER_FAILED, PROG
-from .run import add_force_option, keeping, report_unfinished
+from ..errors import ConfigError, one_line
+from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
+from .run import add_force_option, keeping
 
 HELP = "walk a grid of config values and write sweep.csv and sweep.png"
 
@@ -20,8 +20,10 @@ def configure(p: argparse.ArgumentParser) -> None:
                      "and sweep.png (a convergence and wall-time map) to --out (default "
                      "results/<name>-sweep/). Every combination is validated before any walk "
                      "starts; a walk that fails does not stop the others. Exit code 0 if every "
-                     "walk converged, 3 otherwise (the sweep is still written), 2 for bad input, 130 "
-                     "for Ctrl-C (the finished walks are kept). See docs/sweep.md.")
+                     "walk converged, 3 otherwise (the sweep is still written; a walk whose worker process "
+                     "died is 'lost', the others go on), 2 for bad input, 74 if its files cannot be "
+                     "written, 130 for Ctrl-C and 143 for SIGTERM (the finished walks are kept). See "
+                     "docs/sweep.md.")
     p.add_argument("config", metavar="CONFIG", help="experiment YAML file (see configs/)")
     p.add_argument("--vary", action="append", required=True, metavar="PATH=VALUES",
                    help="a dotted config path (walk.speed, body.height, attributes.trunk_lean, "
@@ -41,13 +43,25 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.epilog = "example: klaw-ocp sweep configs/natural_walk.yaml --vary walk.speed=1:7:1 --method both"
 
 
+#: exit codes beyond commands/__init__.py's: the results could not be written (sysexits'
+#: EX_IOERR), SIGTERM (128 + its number, as a shell reports a process it ended)
+EXIT_WRITE_FAILED = 74
+EXIT_TERMINATED = 143
+
+
 def handle(args: argparse.Namespace) -> int:
+    from ..sweep_pool import TerminateRaises
+    with TerminateRaises():    # SIGTERM stops the sweep as Ctrl-C does (exit 143), its workers with it
+        return _handle(args)
+
+
+def _handle(args: argparse.Namespace) -> int:
     from ..config_paths import combination_label
     from ..errors import Interrupted
     from ..result_files.atomic import atomic_write_text
     from ..result_files.registry import SWEEP_CSV, SWEEP_PNG
     from ..result_files.results_folder import StagedFolder
-    from ..sweep import (append_sweep_row, counts, default_out_dir, parse_vary, run_sweep, summary_line,
+    from ..sweep import (append_sweep_row, counts, default_out_dir, naming, parse_vary, run_sweep, summary_line,
                          sweep_csv, write_sweep)
 
     vary: dict[str, list] = {}
@@ -59,6 +73,7 @@ def handle(args: argparse.Namespace) -> int:
     from ._common import check_output_dir, compile_notice
     out = check_output_dir(args.out if args.out is not None else default_out_dir(args.config), "--out")
     staged = StagedFolder(out, "sweep", force=args.force)       # refused here, before any walk
+    written: list[dict] = []
 
     def staging() -> Path:     # the staging folder opens with the first finished walk
         return staged.path if staged.path is not None else staged.open()
@@ -68,6 +83,7 @@ def handle(args: argparse.Namespace) -> int:
         # every walk cost time growing with the square of the walks); append_sweep_row says why
         # no finished walk is lost
         append_sweep_row(staging() / SWEEP_CSV, row, list(vary))
+        written.append(row)
 
     with keeping(staged, lambda: "the walks finished so far"), compile_notice():
         try:
@@ -75,14 +91,26 @@ def handle(args: argparse.Namespace) -> int:
                              scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),
                              on_row=on_row)
         except Interrupted as exc:
-            if exc.partial:        # the finished walks again, atomically and in grid order
-                atomic_write_text(staging() / SWEEP_CSV, sweep_csv(exc.partial, list(vary)))
-            return report_unfinished(staged, "interrupted", None, f"{len(exc.partial)} finished walk(s)")
+            try:
+                if exc.partial:        # the finished walks again, atomically and in grid order
+                    path = staging() / SWEEP_CSV
+                    with naming(path):
+                        atomic_write_text(path, sweep_csv(exc.partial, list(vary)))
+            except OSError as error:
+                return _not_written(staged, error, f"{len(written)} finished walk(s)")
+            return _stopped(staged, exc, f"{len(exc.partial)} finished walk(s)")
+        except OSError as exc:     # a line of sweep.csv (the workers are stopped)
+            return _not_written(staged, exc, f"{len(written)} finished walk(s)")
         try:
             write_sweep(rows, list(vary), staging(), title=f"{PROG} sweep {os.path.basename(args.config)}")
-        except KeyboardInterrupt:
-            return report_unfinished(staged, "interrupted", None, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)")
-    staged.commit()
+        except KeyboardInterrupt as exc:
+            return _stopped(staged, exc, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)")
+        except OSError as exc:
+            return _not_written(staged, exc, f"all {len(rows)} walks")
+    try:
+        staged.commit()
+    except OSError as exc:
+        return _not_written(staged, exc, f"all {len(rows)} walks")
     print(summary_line(rows, {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}))
     n = counts(rows)
     if n["ok"] == len(rows):
@@ -90,6 +118,35 @@ def handle(args: argparse.Namespace) -> int:
     # a walk that does not converge is one of the sweep's results: the folder is complete
     first = next(r for r in rows if r["status"] != "ok")
     label = combination_label({k: first[k] for k in vary})
-    print(f"{PROG}: error: {len(rows) - n['ok']} of {len(rows)} walks did not converge or failed, the first "
-          f"{label} ({first['method']}): {first['message']}; see {out / SWEEP_CSV}", file=sys.stderr)
+    print(f"{PROG}: error: {len(rows) - n['ok']} of {len(rows)} walks did not converge, failed or were lost, "
+          f"the first {label} ({first['method']}): {first['message']}; see {out / SWEEP_CSV}", file=sys.stderr)
     return EXIT_SOLVER_FAILED
+
+
+def _where_kept(staged, what: str) -> str:
+    """Keep what was written and say where (the staging folder itself if it cannot be moved)."""
+    from ..result_files.results_folder import kept_phrase
+    try:
+        kept = staged.keep()
+    except OSError:
+        return f"{what} left in {staged.path}" if staged.path is not None else "nothing written"
+    return kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
+
+
+def _stopped(staged, exc: BaseException, what: str) -> int:
+    """Ctrl-C (exit 130) or SIGTERM (exit 143): the one line, the finished walks kept."""
+    from ..sweep_pool import Terminated
+    terminated = isinstance(exc, Terminated) or isinstance(exc.__cause__, Terminated)
+    print(f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted (Ctrl-C)'}; "
+          f"{_where_kept(staged, what)}", file=sys.stderr)
+    return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
+
+
+def _not_written(staged, exc: OSError, what: str) -> int:
+    """A file of the sweep could not be written (a full disk, a permission, a folder removed):
+    the one line names the file and the cause, what was written is kept; exit 74."""
+    cause = exc.strerror or one_line(exc) or type(exc).__name__
+    paths = " -> ".join(str(p) for p in (exc.filename, exc.filename2) if p is not None)
+    print(f"{PROG}: error: could not write {paths or 'the results'}: {cause}; the sweep stopped; "
+          f"{_where_kept(staged, what)}", file=sys.stderr)
+    return EXIT_WRITE_FAILED

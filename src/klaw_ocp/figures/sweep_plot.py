@@ -2,7 +2,7 @@
 
 One panel per solver method, the first varied path on x and the second on y (a single row when
 only one path is varied). A cell that converged is a square coloured by the wall time of its walk
-(one colour bar, seconds, shared by the panels); a failed or errored walk is a red 'x'. With more
+(one colour bar, seconds, shared by the panels); a failed, errored or lost walk is a red 'x'. With more
 than two varied paths the others are aggregated: a cell is ok only if all its walks are, and its
 colour is their largest wall time (the title says so). Numeric values sit at their value on the
 axis; anything else (true/false, null, strings) gets categorical ticks in grid order.
@@ -79,7 +79,7 @@ def _cells(rows: list[dict], xpath: str, ypath: str | None) -> dict:
 def _fail_text(row: dict) -> str:
     if row["status"] == "failed":
         return f"step {row['failed_step']}\n{row['failed_subphase']}"
-    return "error"
+    return "lost" if row["status"] == "lost" else "error"
 
 
 def sweep_figure(rows: list[dict], varied_paths: list[str], title: str | None = None) -> Figure:
@@ -137,8 +137,9 @@ def sweep_figure(rows: list[dict], varied_paths: list[str], title: str | None = 
         bar = fig.colorbar(mappable, ax=list(axes), pad=0.02, fraction=0.05 if ypath else 0.04)
         bar.set_label("max wall time per cell [s]" if rest else "wall time per walk [s]")
     _legend(fig)
-    n = {status: sum(r["status"] == status for r in rows) for status in ("ok", "failed", "error")}
+    n = {status: sum(r["status"] == status for r in rows) for status in ("ok", "failed", "error", "lost")}
     head = (title or "klaw-ocp sweep") + f": {len(rows)} walks, {n['ok']} ok, {n['failed']} failed, {n['error']} error"
+    head += f", {n['lost']} lost" if n["lost"] else ""     # a worker process died (docs/sweep.md)
     if rest:
         head += (f"\naggregated over {', '.join(rest)}: a cell is ok only if all its walks are; "
                  f"colour = max wall time")
@@ -154,7 +155,7 @@ def _legend(fig) -> None:
     wrapped = _WALL_NOTE.replace(" includes", "\nincludes")
     for ncol, text in ((3, _WALL_NOTE), (3, wrapped), (1, wrapped)):
         handles = [Line2D([], [], marker="s", ls="", color="#3b8f88", markeredgecolor="0.2", label="converged"),
-                   Line2D([], [], marker="x", ls="", color=_FAIL_COLOUR, markeredgewidth=2.2, label="failed / error"),
+                   Line2D([], [], marker="x", ls="", color=_FAIL_COLOUR, markeredgewidth=2.2, label="failed / error / lost"),
                    Line2D([], [], ls="", label=text)]
         legend = fig.legend(handles=handles, loc="outside lower center", ncol=ncol, fontsize=8, frameon=False,
                             handletextpad=0.3, columnspacing=1.5)
