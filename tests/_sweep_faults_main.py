@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import klaw_ocp.sweep as sweep
+from klaw_ocp.result_files.atomic import naming
 
 #: how long ``after-kill`` waits for a worker to die before walking anyway, s
 WAIT_S = 30.0
@@ -65,7 +66,7 @@ _appended = [0]
 def append_sweep_row(path, row, varied_paths):
     _appended[0] += 1
     if _appended[0] == int(os.environ.get("KLAW_TEST_SWEEP_WRITE_FAIL", "0")):
-        with sweep.naming(path):         # as the real write names its file
+        with naming(path):         # as the real write names its file
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
     _append(path, row, varied_paths)
 

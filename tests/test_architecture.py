@@ -27,9 +27,9 @@ ALLOWED = {
     "human_gait": BASE | {"results", "body_motion", "gait", "body"},
     "result_files": BASE | {"results", "body_motion", "body", "package", "stop_signals"},
     "figures": BASE | {"result_files", "body_motion", "compare", "config_paths", "stop_signals"},
-    "sweep_pool": BASE,
+    "sweep_pool": BASE | {"stop_signals"},
     "sweep": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
-                     "result_files", "figures", "compare", "choices", "sweep_pool"},
+                     "result_files", "figures", "compare", "choices", "sweep_pool", "stop_signals"},
     "reproduce": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
                          "result_files", "figures", "compare", "choices"},
 }

@@ -231,22 +231,49 @@ def test_appending_a_row_names_the_file_when_the_disk_is_full(tmp_path, monkeypa
 
 
 def test_a_map_that_cannot_be_written_is_one_line(config, tmp_path, capsys, monkeypatch):
-    """sweep.png fails (a write that names no file): one line naming it, exit 74, sweep.csv kept."""
-    from klaw_ocp.figures import sweep_plot
-
+    """sweep.png fails (its fsync, on a full disk: an OSError that names no file): one line
+    naming it, exit 74, sweep.csv kept."""
     def quick(mapping, method):
         return {**dict.fromkeys(sweep.RESULT_COLUMNS), "method": method, "status": "ok", "steps": 2, "wall_s": 0.1}
 
-    def denied(*args, **kwargs):
-        raise OSError(errno.EACCES, os.strerror(errno.EACCES))
+    fsync = os.fsync
+
+    def full_for_the_map(fd):
+        if ".sweep.png." in os.readlink(f"/proc/self/fd/{fd}"):      # atomic_path's temporary of the map
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return fsync(fd)
     monkeypatch.setattr(sweep, "run_walk", quick)
-    monkeypatch.setattr(sweep_plot, "write_sweep_png", denied)
+    monkeypatch.setattr(os, "fsync", full_for_the_map)
     out = tmp_path / "out"
     argv = ["sweep", str(config), "--vary", "walk.speed=4,5", "--workers", "1", "--quiet", "--out", str(out)]
     assert main(argv) == 74
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
     assert captured.out == "" and len(err) == 1 and "Traceback" not in captured.err
-    assert err[0].startswith("klaw-ocp: error: could not write ") and "sweep.png: Permission denied" in err[0]
-    assert err[0].endswith(f"all 2 walks written to {out}")
+    assert err[0].startswith(f"klaw-ocp: error: could not write {out / 'sweep.png'}: No space left on device;")
+    assert err[0].endswith(f"all 2 walks written to {out}")      # no earlier sweep: the folder took its place
     assert [r["walk.speed"] for r in _rows(out / "sweep.csv")] == ["4", "5"]
+
+
+def test_a_stop_signal_a_walk_swallowed_stops_a_sweep_in_its_process(monkeypatch):
+    """With --workers 1 a Ctrl-C or SIGTERM that never surfaced (CasADi's wrappers drop the
+    KeyboardInterrupt) still stops the sweep after that walk, its row dropped; one recorded
+    before the sweep began (an earlier walk in the same interpreter) does not."""
+    from klaw_ocp.errors import Interrupted
+    from klaw_ocp.stop_signals import Deferred
+
+    def swallow_a_ctrl_c():
+        with Deferred():              # recorded, never raised: as inside CasADi
+            os.kill(os.getpid(), signal.SIGINT)
+    walked = []
+
+    def swallowing(mapping, method):
+        walked.append(mapping["walk"]["speed"])
+        if len(walked) == 2:
+            swallow_a_ctrl_c()
+        return {**dict.fromkeys(sweep.RESULT_COLUMNS), "method": method, "status": "ok"}
+    monkeypatch.setattr(sweep, "run_walk", swallowing)
+    swallow_a_ctrl_c()                # before the sweep
+    with pytest.raises(Interrupted) as caught:
+        sweep.run_sweep(SHORT, {"walk.speed": [4.0, 5.0, 6.0]}, workers=1)
+    assert walked == [4.0, 5.0] and [row["walk.speed"] for row in caught.value.partial] == [4.0]

@@ -4,7 +4,7 @@ a container stop send) end it the same way, its completed results kept (issue #3
 - :class:`CommandSignals`: for the length of a ``klaw-ocp`` command, SIGTERM raises
   KeyboardInterrupt in the main thread as Ctrl-C does, and every stop signal is recorded, so that
   the command can say which one came (:func:`cause`) and notice one that never reached it
-  (:func:`requested`): CasADi's SWIG wrappers drop a KeyboardInterrupt raised inside a call that
+  (:func:`requested`, :func:`received`): CasADi's SWIG wrappers drop a KeyboardInterrupt raised inside a call that
   calls back into Python (seen while a walk builds its solver).
 - :class:`Deferred`: within the block a stop signal only sets a flag (:meth:`Deferred.check`
   raises then); a walk uses it between steps (:class:`klaw_ocp.console.DeferredInterrupt`), and
@@ -12,7 +12,8 @@ a container stop send) end it the same way, its completed results kept (issue #3
   started: a worker handed half its data prints a traceback).
 - :func:`blocked`: the stop signals blocked in this thread, for starting a process that must
   never see Ctrl-C: it inherits the mask (the drawing workers' forkserver and, through it, every
-  worker: the terminal sends Ctrl-C to each process of the job, and only this one should answer).
+  worker; a sweep's workers: the terminal sends Ctrl-C to each process of the job, and only this
+  one should answer).
 
 Only in the main thread, and only over the handlers that raise KeyboardInterrupt (Python's own
 for SIGINT, the command's): an application's own handler, or a SIGINT ignored by ``nohup``, is
@@ -44,6 +45,13 @@ def _raise_interrupt(signum, frame) -> None:
 def requested() -> bool:
     """Whether a stop signal came since the command began (even one a library swallowed)."""
     return bool(_received)
+
+
+def received() -> int:
+    """How many stop signals came so far: a library function that outlives one (a sweep walking in
+    this process) compares two counts, so that one recorded before it began (a Ctrl-C of an
+    earlier walk in the same interpreter) does not stop it."""
+    return len(_received)
 
 
 def cause() -> str:

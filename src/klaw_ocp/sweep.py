@@ -21,7 +21,6 @@ The `--vary` values are parsed by :mod:`klaw_ocp.config_paths` (the syntax `--se
 """
 from __future__ import annotations
 
-import contextlib
 import copy
 import itertools
 import math
@@ -202,13 +201,14 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
     method in grid order: the varied paths, then :data:`RESULT_COLUMNS`. ``on_row(row)``, if
     given, is called after each walk with its row, in the order the walks finish: ``klaw-ocp
     sweep`` appends it to sweep.csv there. A walk whose worker process died has ``status``
-    "lost" (:mod:`klaw_ocp.sweep_pool`). Ctrl-C or SIGTERM raises
-    :class:`~klaw_ocp.errors.Interrupted` whose ``partial`` is the rows finished; the walks
-    running are abandoned, their workers killed (SIGTERM: its ``__cause__`` is a
-    :class:`~klaw_ocp.sweep_pool.Terminated`). Any other exception (``on_row`` could not write)
-    also kills the workers before it goes on.
+    "lost" (:mod:`klaw_ocp.sweep_pool`). Ctrl-C (or SIGTERM, which ``klaw-ocp`` turns into one:
+    :mod:`klaw_ocp.stop_signals` says which came) raises :class:`~klaw_ocp.errors.Interrupted`
+    whose ``partial`` is the rows finished; the walks running are abandoned, their workers
+    killed. Any other exception (``on_row`` could not write) also kills the workers before it
+    goes on.
     """
-    from .sweep_pool import TerminateRaises, run_jobs
+    from .stop_signals import received
+    from .sweep_pool import run_jobs
 
     _, tasks = expand(config, vary, methods)
     workers = (os.cpu_count() or 1) if workers is None else workers
@@ -231,21 +231,29 @@ def run_sweep(config, vary: dict, methods=None, workers: int | None = None, sche
         done(i, {**dict.fromkeys(RESULT_COLUMNS), "method": tasks[i]["method"], "status": status,
                  "wall_s": wall_s, "message": message})
 
+    def stop_if_signalled() -> None:
+        # a stop signal CasADi's wrappers swallowed in this process (they drop a
+        # KeyboardInterrupt raised inside them): the sweep stops all the same, and the row of a
+        # walk it cut short is not that walk's
+        if received() > signals_before:
+            raise KeyboardInterrupt
+
+    signals_before = received()
     bar = tqdm(total=len(tasks), unit="walk", desc="sweep", file=sys.stderr, disable=not progress)
     try:
-        with TerminateRaises() as terminate:
-            if scheduler is None and (workers == 1 or len(tasks) == 1):
-                for i, task in enumerate(tasks):
-                    row = run_walk(task["mapping"], task["method"])
-                    terminate.check()          # a SIGTERM its solver swallowed: the row is not the walk's
-                    done(i, row)
-            else:
-                if scheduler is None:
-                    _compile_here_first(tasks)
-                run_jobs(run_walk, [(task["mapping"], task["method"]) for task in tasks],
-                         on_done=done, on_error=lambda i, text: unfinished(i, "error", text),
-                         on_lost=lambda i, cause, wall_s: unfinished(i, "lost", cause, wall_s),
-                         workers=workers, scheduler=scheduler)
+        if scheduler is None and (workers == 1 or len(tasks) == 1):
+            for i, task in enumerate(tasks):
+                row = run_walk(task["mapping"], task["method"])
+                stop_if_signalled()
+                done(i, row)
+        else:
+            if scheduler is None:
+                _compile_here_first(tasks)
+                stop_if_signalled()
+            run_jobs(run_walk, [(task["mapping"], task["method"]) for task in tasks],
+                     on_done=done, on_error=lambda i, text: unfinished(i, "error", text),
+                     on_lost=lambda i, cause, wall_s: unfinished(i, "lost", cause, wall_s),
+                     workers=workers, scheduler=scheduler)
     except KeyboardInterrupt as err:
         raise Interrupted(finished()) from err
     finally:
@@ -310,10 +318,8 @@ def write_sweep(rows: list[dict], varied_paths, out_dir, title: str | None = Non
 
     out = Path(out_dir)
     paths = {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}
-    with naming(paths["csv"]):
-        atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
-    with naming(paths["png"]):
-        write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
+    atomic_write_text(paths["csv"], sweep_csv(rows, list(varied_paths)))
+    write_sweep_png(rows, list(varied_paths), paths["png"], title=title)
     return paths
 
 
@@ -327,17 +333,17 @@ def append_sweep_row(path, row: dict, varied_paths) -> None:
     line being written, never an earlier one). The lines are in the order the walks finished;
     ``klaw-ocp sweep`` writes the file again, atomically and in grid order, when the sweep ends
     (:func:`write_sweep`) or is interrupted."""
-    from .result_files.atomic import atomic_write_text
+    from .result_files.atomic import atomic_write_text, naming
 
     path = Path(path)
-    with naming(path):
-        if not path.is_file():
-            atomic_write_text(path, sweep_csv([row], list(varied_paths)))
-            return
-        with open(path, "a", encoding="utf-8", newline="") as handle:
-            handle.write(sweep_csv([row], list(varied_paths), header=False))
-            handle.flush()
-            os.fsync(handle.fileno())
+    if not path.is_file():
+        atomic_write_text(path, sweep_csv([row], list(varied_paths)))
+        return
+    # a write or an fsync that fails (a full disk) names no file: naming() makes its line say which
+    with naming(path), open(path, "a", encoding="utf-8", newline="") as handle:
+        handle.write(sweep_csv([row], list(varied_paths), header=False))
+        handle.flush()
+        os.fsync(handle.fileno())
 
 
 def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:
@@ -345,15 +351,3 @@ def summary_line(rows: list[dict], paths: dict[str, Path]) -> str:
     lost = f", {n['lost']} lost" if n["lost"] else ""
     return (f"{len(rows)} walks: {n['ok']} ok, {n['failed']} failed, {n['error']} error{lost}; "
             f"wrote {paths['csv']} and {paths['png']}")
-
-
-@contextlib.contextmanager
-def naming(path):
-    """An OSError raised in the block names ``path`` when it names no file (a write or an fsync
-    that fails on a full disk does not say which file), so that its one line can."""
-    try:
-        yield
-    except OSError as exc:
-        if exc.filename is None:
-            exc.filename = os.fspath(path)
-        raise

@@ -14,11 +14,12 @@ exactly: only that job is lost (with the signal that ended its process); the oth
 on, and a new process takes the next job. A lost job is not run again: a walk that exhausted the
 memory once would do it again (rerun it alone with ``klaw-ocp run``).
 
-Stopping: any exception in the calling process while jobs run (Ctrl-C, SIGTERM through
-:class:`TerminateRaises`, a row that cannot be written) kills the workers at once (their walks
-are abandoned) before it goes on. Workers ignore SIGINT and SIGTERM (a terminal sends Ctrl-C to
-every process of the job, ``kill`` of a process group SIGTERM): only the sweep's own process
-answers, in one line, and it owns the workers. A worker whose parent is gone ends by itself.
+Stopping: any exception in the calling process while jobs run (Ctrl-C; SIGTERM, which
+``klaw-ocp`` makes raise KeyboardInterrupt as Ctrl-C does, :mod:`klaw_ocp.stop_signals`; a row
+that cannot be written) kills the workers at once (their walks are abandoned) before it goes on.
+Workers ignore SIGINT and SIGTERM (a terminal sends Ctrl-C to every process of the job, ``kill``
+of a process group SIGTERM): only the sweep's own process answers, in one line, and it owns the
+workers. A worker whose parent is gone ends by itself.
 """
 from __future__ import annotations
 
@@ -29,55 +30,12 @@ import time
 from collections import deque
 
 from .errors import KlawError, one_line
+from .stop_signals import STOP_SIGNALS, blocked
 
 #: how often a worker checks that the sweep's process is still there, s
 _PARENT_CHECK_S = 1.0
 #: how long a worker may take to end after being told to, s (then it is killed)
 _JOIN_S = 5.0
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM during a sweep (raised in the main thread by :class:`TerminateRaises`): the sweep
-    stops as for Ctrl-C; the command exits 143 instead of 130."""
-
-
-_terminations = [0]      # SIGTERMs received while a TerminateRaises handler was in place
-
-
-class TerminateRaises:
-    """Context manager: SIGTERM raises :class:`Terminated` in the main thread instead of ending the
-    process on the spot (which would leave the workers running and the finished rows unwritten).
-    Only over the default action (nested: the outer one's handler stays); once: later SIGTERMs
-    are only counted (the sweep is already stopping, and its cleanup must not be cut short).
-    :meth:`check` raises if one came within the block, for a walk run in this process, whose
-    solver may have swallowed the exception."""
-
-    def __init__(self):
-        self._old = None
-        self._seen = 0
-
-    def __enter__(self) -> "TerminateRaises":
-        self._seen = _terminations[0]
-        if (threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL):
-            _terminations[0] = self._seen = 0
-            self._old = signal.signal(signal.SIGTERM, _raise_terminated)
-        return self
-
-    def check(self) -> None:
-        if _terminations[0] > self._seen:
-            raise Terminated
-
-    def __exit__(self, *exc) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGTERM, self._old)
-            self._old = None
-
-
-def _raise_terminated(signum, frame) -> None:
-    _terminations[0] += 1
-    if _terminations[0] == 1:
-        raise Terminated
 
 
 def death_cause(exitcode: int | None) -> str:
@@ -112,10 +70,10 @@ def run_jobs(function, jobs: list[tuple], on_done, on_lost, on_error, workers: i
 def _serve(conn, function) -> None:
     """A worker process: run the jobs that come through ``conn``, one at a time, and send back
     ``(i, "done", value)`` or ``(i, "error", text)``; end on None or when the sweep is gone."""
-    for signum in (signal.SIGINT, signal.SIGTERM):      # the sweep's process answers them
+    for signum in STOP_SIGNALS:                         # the sweep's process answers them
         signal.signal(signum, signal.SIG_IGN)
-    if hasattr(signal, "pthread_sigmask"):              # blocked while it started (_signals_blocked)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    if hasattr(signal, "pthread_sigmask"):              # blocked while it started (_Worker)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, set(STOP_SIGNALS))
     parent = os.getppid()
 
     def watch_parent():           # a sweep killed with SIGKILL leaves no worker walking for nobody
@@ -149,21 +107,6 @@ def _text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-class _signals_blocked:
-    """SIGINT and SIGTERM blocked in this thread while a worker starts: the new process inherits
-    the mask, so a Ctrl-C while it imports never prints its traceback (it ignores both once up).
-    A signal that came meanwhile is delivered here when the block ends."""
-
-    def __enter__(self):
-        self._old = None
-        if hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread():
-            self._old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, self._old)
-
-
 class _Worker:
     """One spawned process ('spawn': CasADi objects never cross a fork), its pipe, and the job it
     is running (None when idle)."""
@@ -172,7 +115,10 @@ class _Worker:
         self.conn, child = context.Pipe()
         self.process = context.Process(target=_serve, args=(child, function), daemon=True,
                                        name="klaw-ocp sweep worker")
-        with _signals_blocked():
+        # SIGINT and SIGTERM blocked while it starts: the new process inherits the mask, so a
+        # Ctrl-C while it imports never prints its traceback (it ignores both once up); one that
+        # came meanwhile is delivered here when the block ends
+        with blocked(STOP_SIGNALS):
             self.process.start()
         child.close()
         self.job: int | None = None
@@ -208,7 +154,7 @@ def _kill_all(pool: list[_Worker]) -> None:
     """Every worker killed first, then reaped, with Ctrl-C and SIGTERM held until then: a second
     Ctrl-C must not leave a worker running (it would ignore the SIGTERM multiprocessing sends its
     daemon processes at exit, and the exit would wait for it)."""
-    with _signals_blocked():
+    with blocked(STOP_SIGNALS):
         for worker in pool:
             if worker.process.is_alive():
                 worker.process.kill()

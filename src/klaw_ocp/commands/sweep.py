@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from .. import choices
-from ..errors import ConfigError, one_line
-from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, PROG
-from .run import add_force_option, keeping
+from ..errors import ConfigError
+from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, EXIT_TERMINATED, EXIT_WRITE_FAILED, PROG
+from .run import add_force_option, keeping, kept_where
 
 HELP = "walk a grid of config values and write sweep.csv and sweep.png"
 
@@ -43,25 +43,25 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.epilog = "example: klaw-ocp sweep configs/natural_walk.yaml --vary walk.speed=1:7:1 --method both"
 
 
-#: exit codes beyond commands/__init__.py's: the results could not be written (sysexits'
-#: EX_IOERR), SIGTERM (128 + its number, as a shell reports a process it ended)
-EXIT_WRITE_FAILED = 74
-EXIT_TERMINATED = 143
-
-
 def handle(args: argparse.Namespace) -> int:
-    from ..sweep_pool import TerminateRaises
-    with TerminateRaises():    # SIGTERM stops the sweep as Ctrl-C does (exit 143), its workers with it
-        return _handle(args)
+    """The sweep (SIGTERM stops it as Ctrl-C does: :func:`klaw_ocp.cli.main` installs
+    :class:`klaw_ocp.stop_signals.CommandSignals` for every command)."""
+    try:
+        return _sweep(args)
+    except KeyboardInterrupt as exc:
+        # a stop the sweep could not answer where it came (before the first walk, or a second
+        # one while it was ending): the sweep's own line all the same, with where its results are
+        return _stop_line(getattr(exc, "where", ""))
 
 
-def _handle(args: argparse.Namespace) -> int:
+def _sweep(args: argparse.Namespace) -> int:
     from ..config_paths import combination_label
     from ..errors import Interrupted
     from ..result_files.atomic import atomic_write_text
     from ..result_files.registry import SWEEP_CSV, SWEEP_PNG
     from ..result_files.results_folder import StagedFolder
-    from ..sweep import (append_sweep_row, counts, default_out_dir, naming, parse_vary, run_sweep, summary_line,
+    from ..stop_signals import Deferred
+    from ..sweep import (append_sweep_row, counts, default_out_dir, parse_vary, run_sweep, summary_line,
                          sweep_csv, write_sweep)
 
     vary: dict[str, list] = {}
@@ -91,26 +91,30 @@ def _handle(args: argparse.Namespace) -> int:
                              scheduler=args.scheduler, progress=not args.quiet and sys.stderr.isatty(),
                              on_row=on_row)
         except Interrupted as exc:
-            try:
-                if exc.partial:        # the finished walks again, atomically and in grid order
-                    path = staging() / SWEEP_CSV
-                    with naming(path):
-                        atomic_write_text(path, sweep_csv(exc.partial, list(vary)))
-            except OSError as error:
-                return _not_written(staged, error, f"{len(written)} finished walk(s)")
-            return _stopped(staged, exc, f"{len(exc.partial)} finished walk(s)")
+            # the sweep is stopping: a second signal waits until the finished walks are kept
+            with Deferred(second_raises=False):
+                try:
+                    if exc.partial:        # the finished walks again, atomically and in grid order
+                        atomic_write_text(staging() / SWEEP_CSV, sweep_csv(exc.partial, list(vary)))
+                except OSError as error:
+                    return _not_written(staged, error, f"{len(written)} finished walk(s)")
+                return _stop_line(_where_kept(staged, f"{len(exc.partial)} finished walk(s)"))
         except OSError as exc:     # a line of sweep.csv (the workers are stopped)
             return _not_written(staged, exc, f"{len(written)} finished walk(s)")
         try:
             write_sweep(rows, list(vary), staging(), title=f"{PROG} sweep {os.path.basename(args.config)}")
-        except KeyboardInterrupt as exc:
-            return _stopped(staged, exc, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)")
+        except KeyboardInterrupt:
+            with Deferred(second_raises=False):
+                return _stop_line(_where_kept(staged, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)"))
         except OSError as exc:
             return _not_written(staged, exc, f"all {len(rows)} walks")
-    try:
-        staged.commit()
-    except OSError as exc:
-        return _not_written(staged, exc, f"all {len(rows)} walks")
+        try:
+            staged.commit()      # a stop signal while the folders are swapped waits for its end
+        except KeyboardInterrupt:       # one just before (writing the marker): the sweep's line too
+            with Deferred(second_raises=False):
+                return _stop_line(_where_kept(staged, f"all {len(rows)} walks"))
+        except OSError as exc:
+            return _not_written(staged, exc, f"all {len(rows)} walks")
     print(summary_line(rows, {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}))
     n = counts(rows)
     if n["ok"] == len(rows):
@@ -125,28 +129,29 @@ def _handle(args: argparse.Namespace) -> int:
 
 def _where_kept(staged, what: str) -> str:
     """Keep what was written and say where (the staging folder itself if it cannot be moved)."""
-    from ..result_files.results_folder import kept_phrase
     try:
-        kept = staged.keep()
+        return kept_where(staged, what)
     except OSError:
         return f"{what} left in {staged.path}" if staged.path is not None else "nothing written"
-    return kept_phrase(kept, staged) if kept is None else f"{what} {kept_phrase(kept, staged)}"
 
 
-def _stopped(staged, exc: BaseException, what: str) -> int:
-    """Ctrl-C (exit 130) or SIGTERM (exit 143): the one line, the finished walks kept."""
-    from ..sweep_pool import Terminated
-    terminated = isinstance(exc, Terminated) or isinstance(exc.__cause__, Terminated)
-    print(f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted (Ctrl-C)'}; "
-          f"{_where_kept(staged, what)}", file=sys.stderr)
-    return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
+def _stop_line(where: str) -> int:
+    """The sweep's one line for Ctrl-C (exit 130) or SIGTERM (exit 143; docs/sweep.md), ``where``
+    saying where the finished walks are."""
+    from ..stop_signals import terminated
+    line = "terminated (SIGTERM)" if terminated() else "interrupted (Ctrl-C)"
+    print(f"{PROG}: {line}" + (f"; {where}" if where else ""), file=sys.stderr)
+    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
 
 
 def _not_written(staged, exc: OSError, what: str) -> int:
     """A file of the sweep could not be written (a full disk, a permission, a folder removed):
     the one line names the file and the cause, what was written is kept; exit 74."""
-    cause = exc.strerror or one_line(exc) or type(exc).__name__
-    paths = " -> ".join(str(p) for p in (exc.filename, exc.filename2) if p is not None)
-    print(f"{PROG}: error: could not write {paths or 'the results'}: {cause}; the sweep stopped; "
-          f"{_where_kept(staged, what)}", file=sys.stderr)
+    from ..errors import os_error_text
+    staging = staged.path
+    where = _where_kept(staged, what)
+    text = os_error_text(exc) if exc.filename is not None else f"the results: {os_error_text(exc)}"
+    if staging is not None and staged.kept is not None:     # the file as it is named now
+        text = text.replace(str(staging), str(staged.kept))
+    print(f"{PROG}: error: could not write {text}; the sweep stopped; {where}", file=sys.stderr)
     return EXIT_WRITE_FAILED
