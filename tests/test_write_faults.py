@@ -4,10 +4,12 @@ that is kept never says "ok" for files it lacks; earlier results stay untouched.
 
 The full disk is simulated in this process: every file the package writes goes through
 ``open`` in result_files.atomic and result_files.run_writer, and ``os.write`` in run_writer (the
-step-by-step appends); a :class:`FullDisk` meters them and refuses, as a full disk does
-(OSError ENOSPC, naming no file), the first write past its budget. A first run records where
-each file's bytes start, so that the budgets fall in every phase of a run: its first step, a later
-step, the body files, the plots, the final summary.
+step-by-step appends); a :class:`FullDisk` meters them and, from a named write on (the n-th write
+of a file), refuses every write as a full disk does (OSError ENOSPC, naming no file). The disk
+fills at a file, not at a byte count: summary.json, rewritten after every step, holds solve times
+whose text length differs from run to run (``0.0123`` or ``0.012345678901234567``), so a byte
+count taken from one run falls a file early or late in the next. Only the order of the writes is
+taken from a recorded run, and it is the same in every run of the same walk.
 """
 import builtins
 import errno
@@ -30,21 +32,40 @@ from klaw_ocp.result_files.atomic import atomic_write_bytes
 from test_failures import _config, _env, _lines, _wait_for_steps
 
 
+def _file_name(path) -> str:
+    """The result file a write goes to: ``path``'s name without its temporary's prefix and
+    suffix (``.summary.json.k2x9a.tmp`` is summary.json; the marker's ``.klaw-ocp.k2x9a.tmp``
+    is klaw-ocp)."""
+    name = os.path.basename(str(path))
+    if name.endswith(".tmp"):
+        name = name[:-len(".tmp")].lstrip(".").rsplit(".", 1)[0]
+    return name
+
+
 class FullDisk:
-    """A disk of ``budget`` bytes: a write past it raises ENOSPC, naming no file. ``writes``:
-    each write's file name and the bytes used before it."""
+    """A disk that fills at the ``nth`` write of the file ``name`` (``fills_at``; ``name`` may be
+    a suffix: ".png" for any plot): that write and every later one raise ENOSPC, naming no file.
+    ``freed``: the space the refused file's temporary held, given back when it is removed (a later
+    write of up to that many bytes fits). ``writes``: each write's file name; ``refused``: the
+    name of the write the disk filled at (None if it never filled)."""
 
-    def __init__(self, budget: float, freed: int = 0):
-        self.budget, self.used, self.writes, self.freed = budget, 0, [], freed
+    def __init__(self, fills_at: tuple[str, int] | None = None, freed: int = 0):
+        self.fills_at, self.freed = fills_at, freed
+        self.writes: list[str] = []
+        self.room = float("inf")         # the bytes the disk still takes
+        self.refused = None
 
-    def take(self, n: int, name) -> None:
-        name = os.path.basename(str(name)).split(".tmp")[0].lstrip(".")
-        self.writes.append((name.rsplit(".", 1)[0] if name.count(".") > 1 else name, self.used))
-        if self.used + n > self.budget:
-            # ``freed``: the space the refused file's temporary held, given back when it is removed
-            self.budget, self.freed = self.budget + self.freed, 0
+    def take(self, n: int, path) -> None:
+        name = _file_name(path)
+        self.writes.append(name)
+        if self.fills_at is not None and self.refused is None:
+            target, nth = self.fills_at
+            if sum(1 for written in self.writes if written.endswith(target)) == nth and name.endswith(target):
+                self.room, self.refused = 0, name
+        if n > self.room:
+            self.room, self.freed = self.room + self.freed, 0
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        self.used += n
+        self.room -= n
 
 
 class _Metered:
@@ -79,18 +100,20 @@ class _OsWithDisk:
         return getattr(os, name)
 
 
+def _install(meter: FullDisk, monkeypatch) -> FullDisk:
+    def metered_open(file, mode="r", *args, **kwargs):
+        handle = builtins.open(file, mode, *args, **kwargs)
+        return _Metered(handle, meter, file) if any(c in mode for c in "wa+") else handle
+    for module in (atomic, run_writer):
+        monkeypatch.setattr(module, "open", metered_open, raising=False)
+    monkeypatch.setattr(run_writer, "os", _OsWithDisk(meter))
+    return meter
+
+
 @pytest.fixture
 def disk(monkeypatch):
-    def install(budget: float, freed: int = 0) -> FullDisk:
-        meter = FullDisk(budget, freed)
-
-        def metered_open(file, mode="r", *args, **kwargs):
-            handle = builtins.open(file, mode, *args, **kwargs)
-            return _Metered(handle, meter, file) if any(c in mode for c in "wa+") else handle
-        for module in (atomic, run_writer):
-            monkeypatch.setattr(module, "open", metered_open, raising=False)
-        monkeypatch.setattr(run_writer, "os", _OsWithDisk(meter))
-        return meter
+    def install(fills_at: tuple[str, int], freed: int = 0) -> FullDisk:
+        return _install(FullDisk(fills_at, freed), monkeypatch)
     return install
 
 
@@ -104,56 +127,44 @@ def four_steps(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def layout(four_steps, tmp_path_factory):
-    """Each write of a run with plots: (file name, bytes used before it), and the bytes of the
-    run (measured on an unlimited disk)."""
-    import klaw_ocp.result_files.atomic as a
-    import klaw_ocp.result_files.run_writer as w
-    meter, patch = FullDisk(float("inf")), pytest.MonkeyPatch()
-
-    def metered_open(file, mode="r", *args, **kwargs):
-        handle = builtins.open(file, mode, *args, **kwargs)
-        return _Metered(handle, meter, file) if any(c in mode for c in "wa+") else handle
-    for module in (a, w):
-        patch.setattr(module, "open", metered_open, raising=False)
-    patch.setattr(w, "os", _OsWithDisk(meter))
+def writes(four_steps, tmp_path_factory):
+    """The file of each write of a run with plots, in order (on a disk that never fills)."""
+    patch = pytest.MonkeyPatch()
     try:
+        meter = _install(FullDisk(), patch)
         assert _run(four_steps, tmp_path_factory.mktemp("layout") / "out") == 0
     finally:
         patch.undo()
-    return meter.writes, meter.used
+    return meter.writes
 
 
-def _before(writes, name: str, nth: int = 1) -> int:
-    """The bytes used before the ``nth`` write of ``name`` (a suffix: ".png" for any plot)."""
-    return [used for written, used in writes if written == name or written.endswith(name)][nth - 1]
-
-
-#: the phases of a run a full disk can stop: the write that fails (its file, which write of it)
+#: the phases of a run a full disk can stop: the write the disk fills at (its file, which write
+#: of it; -1 the last)
 PHASES = {"the first step": ("dynamics.csv", 2), "a later step": ("dynamics.csv", 3),
           "the body files": ("walk.bvh", 1), "the plots": (".png", 1), "the final summary": ("summary.json", -1)}
 
 
 @pytest.mark.parametrize("phase", list(PHASES))
-def test_a_full_disk_is_one_line_exit_74_and_never_an_ok_summary(phase, layout, four_steps, disk, tmp_path,
+def test_a_full_disk_is_one_line_exit_74_and_never_an_ok_summary(phase, writes, four_steps, disk, tmp_path,
                                                                   capsys):
-    writes, _ = layout
     name, nth = PHASES[phase]
-    budget = _before(writes, name, nth) if nth > 0 else [u for w, u in writes if w == name][nth]
+    if nth < 0:
+        nth += 1 + sum(1 for written in writes if written.endswith(name))
     out = tmp_path / "out"
     out.mkdir()
     (out / "summary.json").write_text('{"steps": [], "body": {}}')       # an earlier run of ours
     earlier = (out / "summary.json").read_bytes()
-    disk(budget)
+    meter = disk((name, nth))
     code = _run(four_steps, out)
     err = _lines(capsys.readouterr().err)
     assert code == EXIT_WRITE_FAILED, err
+    assert meter.refused is not None and meter.refused.endswith(name), (meter.refused, phase)
     assert len(err) == 1 and err[0].startswith("klaw-ocp: error: writing the results failed: "), err
     assert "No space left on device" in err[0] and "Traceback" not in err[0]
     kept = next(tmp_path.glob("out.partial-*"))
     assert f"kept in {kept} (the earlier results in {out} are untouched)" in err[0]
     named = err[0].split("writing the results failed: ")[1].split(": No space")[0]
-    assert named.startswith(str(kept) + os.sep)          # the file, as it is named now
+    assert named.startswith(str(kept) + os.sep) and named.endswith(name), (named, phase)   # the file, as named now
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"] and (out / "summary.json").read_bytes() == earlier
     # no summary (the disk filled before the first), one still "running", or "incomplete" with why
     summary = json.loads((kept / "summary.json").read_text()) if (kept / "summary.json").exists() else {}
@@ -163,10 +174,9 @@ def test_a_full_disk_is_one_line_exit_74_and_never_an_ok_summary(phase, layout, 
     assert not list(kept.rglob(".*.tmp"))               # no temporary left
 
 
-def test_a_first_run_that_fills_the_disk_is_kept_in_place(layout, four_steps, disk, tmp_path, capsys):
-    writes, _ = layout
+def test_a_first_run_that_fills_the_disk_is_kept_in_place(four_steps, disk, tmp_path, capsys):
     out = tmp_path / "out"
-    disk(_before(writes, "walk.bvh"), freed=10 ** 7)      # the half-written walk.bvh is removed
+    disk(("walk.bvh", 1), freed=10 ** 7)      # the half-written walk.bvh is removed
     assert _run(four_steps, out) == EXIT_WRITE_FAILED
     err = _lines(capsys.readouterr().err)
     assert len(err) == 1 and f"written to {out}" in err[0] and f"{out}{os.sep}walk.bvh: No space" in err[0], err
@@ -228,9 +238,10 @@ def test_a_folder_removed_while_the_run_writes_is_one_line_and_exit_74(tmp_path)
 
 def test_compare_on_a_full_disk_is_one_line_exit_74(short_config, disk, tmp_path, capsys):
     out = tmp_path / "cmp"
-    disk(30_000)            # the first run's folder, then full
+    meter = disk(("summary.json", 1))      # full in the first run's first step
     assert main(["compare", str(short_config), "--out", str(out), "--quiet"]) == EXIT_WRITE_FAILED
     err = _lines(capsys.readouterr().err)
     assert len(err) == 1 and err[0].startswith("klaw-ocp: error: writing the results failed: "), err
     assert "No space left on device" in err[0] and f"written to {out}" in err[0]
     assert all(json.loads(p.read_text())["status"] != "ok" for p in out.rglob("summary.json"))
+    assert meter.refused == "summary.json"
