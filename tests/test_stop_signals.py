@@ -139,10 +139,10 @@ CASES = {  # moment: (signal, to the group, steps, flags)
 def test_a_signal_ends_the_run_in_one_line_keeping_what_was_done(case, tmp_path):
     moment, signum, to_group, steps, flags = CASES[case]
     code, stdout, stderr, out, left = _run_and_signal(tmp_path, moment, signum, to_group, steps, flags)
-    name = "Ctrl-C" if signum == signal.SIGINT else "SIGTERM"
+    words = "interrupted (Ctrl-C)" if signum == signal.SIGINT else "terminated (SIGTERM)"
     assert code == (EXIT_INTERRUPTED if signum == signal.SIGINT else EXIT_TERMINATED), stderr
     lines = _lines(stderr)
-    assert len(lines) == 1 and lines[0].startswith(f"klaw-ocp: interrupted ({name}); "), stderr
+    assert len(lines) == 1 and lines[0].startswith(f"klaw-ocp: {words}; "), stderr
     assert "Traceback" not in stderr and stdout == ""
     assert left == [], f"processes left: {left}"
     # the earlier results untouched, the new ones beside them under the documented name
@@ -150,7 +150,7 @@ def test_a_signal_ends_the_run_in_one_line_keeping_what_was_done(case, tmp_path)
     partial = sorted(out.parent.glob("o.partial-*"))
     assert len(partial) == 1 and f"kept in {partial[0]} (the earlier results in {out} are untouched)" in lines[0]
     summary = json.loads((partial[0] / "summary.json").read_text())
-    assert summary["status"] == "interrupted" and summary["message"].startswith(f"interrupted ({name})")
+    assert summary["status"] == "interrupted" and summary["message"].startswith(words)
     done = summary["steps_completed"]
     assert f"{done} completed step(s)" in lines[0]
     assert done >= (1 if moment == "steps" else 0) and (moment != "plots" or done == steps)

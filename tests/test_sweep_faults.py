@@ -212,7 +212,7 @@ def test_a_row_that_cannot_be_written_stops_the_sweep_in_one_line(config, tmp_pa
     code, out, err = _finish(proc)
     assert code == 74 and out == "", err
     assert len(err) == 1 and err[0].startswith("klaw-ocp: error: could not write ")
-    assert "sweep.csv: No space left on device; the sweep stopped; 1 finished walk(s) written to" in err[0]
+    assert "sweep.csv: No space left on device; 1 finished walk(s) written to" in err[0]
     assert [r["walk.speed"] for r in _rows(tmp_path / "out" / "sweep.csv")] == ["4"]
     _assert_no_process_left(children)
 

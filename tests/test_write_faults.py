@@ -159,18 +159,18 @@ def test_a_full_disk_is_one_line_exit_74_and_never_an_ok_summary(phase, writes, 
     err = _lines(capsys.readouterr().err)
     assert code == EXIT_WRITE_FAILED, err
     assert meter.refused is not None and meter.refused.endswith(name), (meter.refused, phase)
-    assert len(err) == 1 and err[0].startswith("klaw-ocp: error: writing the results failed: "), err
+    assert len(err) == 1 and err[0].startswith("klaw-ocp: error: could not write "), err
     assert "No space left on device" in err[0] and "Traceback" not in err[0]
     kept = next(tmp_path.glob("out.partial-*"))
     assert f"kept in {kept} (the earlier results in {out} are untouched)" in err[0]
-    named = err[0].split("writing the results failed: ")[1].split(": No space")[0]
+    named = err[0].split("could not write ")[1].split(": No space")[0]
     assert named.startswith(str(kept) + os.sep) and named.endswith(name), (named, phase)   # the file, as named now
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"] and (out / "summary.json").read_bytes() == earlier
     # no summary (the disk filled before the first), one still "running", or "incomplete" with why
     summary = json.loads((kept / "summary.json").read_text()) if (kept / "summary.json").exists() else {}
     assert summary.get("status", "running") in ("running", "incomplete"), phase
     if summary.get("status") == "incomplete":
-        assert "No space left on device" in summary["message"]
+        assert summary["message"].startswith("could not write ") and "No space left on device" in summary["message"]
     assert not list(kept.rglob(".*.tmp"))               # no temporary left
 
 
@@ -231,7 +231,7 @@ def test_a_folder_removed_while_the_run_writes_is_one_line_and_exit_74(tmp_path)
     assert process.returncode == EXIT_WRITE_FAILED, stderr
     lines = _lines(stderr)
     assert len(lines) == 1 and "Traceback" not in stderr and stdout == "", stderr
-    assert lines[0].startswith(f"klaw-ocp: error: writing the results failed: {partial}{os.sep}")
+    assert lines[0].startswith(f"klaw-ocp: error: could not write {partial}{os.sep}")
     assert "No such file or directory" in lines[0] and lines[0].endswith("nothing written")
     assert not partial.exists() and not out.exists()          # nothing made again
 
@@ -241,7 +241,7 @@ def test_compare_on_a_full_disk_is_one_line_exit_74(short_config, disk, tmp_path
     meter = disk(("summary.json", 1))      # full in the first run's first step
     assert main(["compare", str(short_config), "--out", str(out), "--quiet"]) == EXIT_WRITE_FAILED
     err = _lines(capsys.readouterr().err)
-    assert len(err) == 1 and err[0].startswith("klaw-ocp: error: writing the results failed: "), err
+    assert len(err) == 1 and err[0].startswith("klaw-ocp: error: could not write "), err
     assert "No space left on device" in err[0] and f"written to {out}" in err[0]
     assert all(json.loads(p.read_text())["status"] != "ok" for p in out.rglob("summary.json"))
     assert meter.refused == "summary.json"

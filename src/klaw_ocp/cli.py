@@ -32,7 +32,8 @@ from typing import Callable
 
 from .commands import EXIT_USAGE, EXIT_WRITE_FAILED, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
-from .errors import ConfigError, KlawError, ResultsNotWritten, cut, one_line, os_error_text, short_repr
+from .commands._common import report_stop, unwritten
+from .errors import ConfigError, KlawError, ResultsNotWritten, cut, one_line, short_repr
 from .stop_signals import CommandSignals
 
 
@@ -204,7 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt as exc:   # Ctrl-C or SIGTERM the command did not report (before or after a walk)
-        return _run.report_stop(getattr(exc, "where", ""))
+        return report_stop(getattr(exc, "where", ""))
     except BrokenPipeError:
         # The reader (e.g. `| head`) closed the pipe: stop quietly, as the Python docs advise,
         # and keep the interpreter from failing again when it flushes stdout at exit.
@@ -212,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 1
     except OSError as exc:    # a write outside a results folder (klaw-ocp plot's --out): the same one line
-        print(f"{PROG}: error: writing failed: {os_error_text(exc)}", file=sys.stderr)
+        print(f"{PROG}: error: could not write {unwritten(exc)}", file=sys.stderr)
         return EXIT_WRITE_FAILED
 
 

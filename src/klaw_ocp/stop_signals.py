@@ -3,7 +3,7 @@ a container stop send) end it the same way, its completed results kept (issue #3
 
 - :class:`CommandSignals`: for the length of a ``klaw-ocp`` command, SIGTERM raises
   KeyboardInterrupt in the main thread as Ctrl-C does, and every stop signal is recorded, so that
-  the command can say which one came (:func:`cause`) and notice one that never reached it
+  the command can say which one came (:func:`stopped_words`) and notice one that never reached it
   (:func:`requested`, :func:`received`): CasADi's SWIG wrappers drop a KeyboardInterrupt raised inside a call that
   calls back into Python (seen while a walk builds its solver).
 - :class:`Deferred`: within the block a stop signal only sets a flag (:meth:`Deferred.check`
@@ -25,9 +25,10 @@ import signal
 import threading
 from contextlib import contextmanager
 
-#: the signals that stop a command, and how its one line names each
-CAUSES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
-STOP_SIGNALS = tuple(CAUSES)
+#: the signals that stop a command, and how its one line and an interrupted walk's message say
+#: what each did (as a shell says it of a process: Ctrl-C interrupts, SIGTERM terminates)
+STOPPED_WORDS = {signal.SIGINT: "interrupted (Ctrl-C)", signal.SIGTERM: "terminated (SIGTERM)"}
+STOP_SIGNALS = tuple(STOPPED_WORDS)
 
 _received: list[int] = []       # the stop signals received since the command began
 
@@ -54,9 +55,11 @@ def received() -> int:
     return len(_received)
 
 
-def cause() -> str:
-    """The first stop signal's name in the command's line: "Ctrl-C" (also when none came) or "SIGTERM"."""
-    return CAUSES.get(_received[0], "Ctrl-C") if _received else "Ctrl-C"
+def stopped_words() -> str:
+    """What the first stop signal did, in the command's line and the walk's message: "interrupted
+    (Ctrl-C)" (also when none came) or "terminated (SIGTERM)"."""
+    first = _received[0] if _received else signal.SIGINT
+    return STOPPED_WORDS.get(first, STOPPED_WORDS[signal.SIGINT])
 
 
 def terminated() -> bool:

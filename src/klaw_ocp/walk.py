@@ -37,7 +37,7 @@ from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
-from .stop_signals import cause as stop_cause
+from .stop_signals import stopped_words
 
 
 @dataclass
@@ -204,7 +204,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             interrupts.check()
     except ConvergenceError as err:
         if interrupts.pressed:      # a second Ctrl-C inside IPOPT fails the solve: it is an interrupt
-            walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()})"
+            walk.status, walk.message = "interrupted", stopped_words()
             raise Interrupted(walk) from None
         walk.status, walk.message, walk.failure = "failed", str(err), err.as_dict()
         err.partial = walk
@@ -212,7 +212,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
             raise
         return walk
     except KeyboardInterrupt as err:
-        walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()})"
+        walk.status, walk.message = "interrupted", stopped_words()
         raise Interrupted(walk) from err
     finally:
         # however the walk ends (complete, failed, interrupted): before the caller sees it

@@ -1,10 +1,13 @@
 """What several subcommands share: the ``--set`` option, loading a config with its overrides,
-the check of an output folder before any solving, and the text of ``config.resolved.yaml``."""
+the check of an output folder before any solving, the text of ``config.resolved.yaml``, and the
+words of a command stopped by a signal or unable to write its results (the same for every
+command: docs/experiments.md, "Exit codes")."""
 from __future__ import annotations
 
 import argparse
 import os
 import shlex
+import sys
 from pathlib import Path
 
 from .. import __version__
@@ -93,3 +96,32 @@ def compile_notice():
     from ..solvers.kernels import compile_notices
     from . import PROG
     return compile_notices(CompileNotice(PROG))
+
+
+def report_stop(where: str = "") -> int:
+    """Print the one line of a command that Ctrl-C or SIGTERM stopped (``where``: where its
+    results are) and return its exit code: ``klaw-ocp: interrupted (Ctrl-C); <where>``, exit 130,
+    or ``klaw-ocp: terminated (SIGTERM); <where>``, exit 143 (128 + the signal's number)."""
+    from ..stop_signals import stopped_words, terminated
+    from . import EXIT_INTERRUPTED, EXIT_TERMINATED, PROG
+    print(f"{PROG}: {stopped_words()}" + (f"; {where}" if where else ""), file=sys.stderr)
+    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
+
+
+def unwritten(exc: OSError) -> str:
+    """What could not be written and why, as the line and summary.json's message say it:
+    ``<path>: <cause>`` (``/tmp/out/walk.bvh: No space left on device``), ``the results: <cause>``
+    for an error that names no file."""
+    from ..errors import os_error_text
+    return os_error_text(exc) if exc.filename is not None else f"the results: {os_error_text(exc)}"
+
+
+def could_not_write(what: str, where: str, staging=None, kept=None) -> str:
+    """A failed write (a full disk, a permission lost, a folder removed) in the words every command
+    uses after ``klaw-ocp: error: ``: ``could not write <path>: <cause>; <where>`` (``what``:
+    :func:`unwritten`; ``where``: where what was written is kept). ``staging``, ``kept``: the
+    staging folder the file was written in and the folder it was kept as: the path is then the
+    file as it is named now."""
+    if staging is not None and kept is not None:
+        what = what.replace(str(staging), str(kept))
+    return f"could not write {what}; {where}"

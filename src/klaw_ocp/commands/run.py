@@ -31,9 +31,10 @@ from pathlib import Path
 from .. import choices
 from ..errors import one_line
 from ..result_files.registry import RUN_FILES
-from ..stop_signals import cause as stop_cause
-from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, EXIT_TERMINATED, PROG
-from ._common import add_set_option, check_output_dir, load, resolved_header
+from ..stop_signals import stopped_words
+from . import EXIT_OK, EXIT_SOLVER_FAILED, PROG
+from ._common import (add_set_option, check_output_dir, could_not_write, load, report_stop, resolved_header,
+                      unwritten)
 
 RUN_HELP = "simulate a configured walk and write its result files and plots"
 VALIDATE_HELP = "check a config and print its walk plan, solving nothing"
@@ -128,7 +129,7 @@ def walk_into(writer, spec, quiet: bool = True):
     except KeyboardInterrupt as exc:      # klaw_ocp.errors.Interrupted, or Ctrl-C before the first step
         walk = getattr(exc, "partial", None)
         if walk is None:
-            walk = Walk(spec, status="interrupted", message=f"interrupted ({stop_cause()})")
+            walk = Walk(spec, status="interrupted", message=stopped_words())
         return walk, "interrupted", None
 
 
@@ -157,7 +158,7 @@ def finish_into(writer, walk, outcome: str, plots: bool = False, animation: bool
         paths["summary"] = writer.write_summary(run.summary)
         return paths, times, outcome, run
     except KeyboardInterrupt:
-        walk.status, walk.message = "interrupted", f"interrupted ({stop_cause()}) while writing the results"
+        walk.status, walk.message = "interrupted", f"{stopped_words()} while writing the results"
         try:
             writer.finish(walk, body=False)
         except KeyboardInterrupt:
@@ -178,7 +179,7 @@ def keeping(staged, what, on_write_error=None):
     - a KlawError (bad input found late, e.g. a sweep's grid): on to its own one line, what was
       written kept without a word;
     - anything else (a bug): one line saying where, and the exception goes on with its traceback."""
-    from ..errors import Interrupted, KlawError, ResultsNotWritten, os_error_text
+    from ..errors import Interrupted, KlawError, ResultsNotWritten
     try:
         yield
     except KlawError:
@@ -188,13 +189,11 @@ def keeping(staged, what, on_write_error=None):
         staged.keep()
         raise
     except OSError as exc:
-        text, staging = os_error_text(exc), staged.path
+        text, staging = unwritten(exc), staged.path
         if on_write_error is not None:
             on_write_error(text)
         where = kept_where(staged, what())
-        if staging is not None and staged.kept is not None:     # the file as it is named now
-            text = text.replace(str(staging), str(staged.kept))
-        raise ResultsNotWritten(f"writing the results failed: {text}; {where}") from None
+        raise ResultsNotWritten(could_not_write(text, where, staging, staged.kept)) from None
     except KeyboardInterrupt as exc:
         stopped = Interrupted(getattr(exc, "partial", None))
         stopped.where = kept_where(staged, what())
@@ -222,14 +221,6 @@ def report_unfinished(staged, outcome: str, failure, what: str) -> int:
         print(f"{PROG}: error: {failure_sentence(failure)}; {where}", file=sys.stderr)
         return EXIT_SOLVER_FAILED
     return report_stop(where)
-
-
-def report_stop(where: str = "") -> int:
-    """The one line of a command stopped by Ctrl-C or SIGTERM (``where``: where its results are)
-    and its exit code: 130 for Ctrl-C, 143 for SIGTERM (128 + the signal's number)."""
-    from ..stop_signals import terminated
-    print(f"{PROG}: interrupted ({stop_cause()})" + (f"; {where}" if where else ""), file=sys.stderr)
-    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
 
 
 def failure_sentence(failure) -> str:

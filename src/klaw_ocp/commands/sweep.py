@@ -8,7 +8,8 @@ from pathlib import Path
 
 from .. import choices
 from ..errors import ConfigError
-from . import EXIT_INTERRUPTED, EXIT_OK, EXIT_SOLVER_FAILED, EXIT_TERMINATED, EXIT_WRITE_FAILED, PROG
+from . import EXIT_OK, EXIT_SOLVER_FAILED, EXIT_WRITE_FAILED, PROG
+from ._common import could_not_write, report_stop, unwritten
 from .run import add_force_option, keeping, kept_where
 
 HELP = "walk a grid of config values and write sweep.csv and sweep.png"
@@ -50,8 +51,8 @@ def handle(args: argparse.Namespace) -> int:
         return _sweep(args)
     except KeyboardInterrupt as exc:
         # a stop the sweep could not answer where it came (before the first walk, or a second
-        # one while it was ending): the sweep's own line all the same, with where its results are
-        return _stop_line(getattr(exc, "where", ""))
+        # one while it was ending): its one line all the same, with where its results are
+        return report_stop(getattr(exc, "where", ""))
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -98,21 +99,21 @@ def _sweep(args: argparse.Namespace) -> int:
                         atomic_write_text(staging() / SWEEP_CSV, sweep_csv(exc.partial, list(vary)))
                 except OSError as error:
                     return _not_written(staged, error, f"{len(written)} finished walk(s)")
-                return _stop_line(_where_kept(staged, f"{len(exc.partial)} finished walk(s)"))
+                return report_stop(_where_kept(staged, f"{len(exc.partial)} finished walk(s)"))
         except OSError as exc:     # a line of sweep.csv (the workers are stopped)
             return _not_written(staged, exc, f"{len(written)} finished walk(s)")
         try:
             write_sweep(rows, list(vary), staging(), title=f"{PROG} sweep {os.path.basename(args.config)}")
         except KeyboardInterrupt:
             with Deferred(second_raises=False):
-                return _stop_line(_where_kept(staged, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)"))
+                return report_stop(_where_kept(staged, f"all {len(rows)} walks ({SWEEP_PNG} not drawn)"))
         except OSError as exc:
             return _not_written(staged, exc, f"all {len(rows)} walks")
         try:
             staged.commit()      # a stop signal while the folders are swapped waits for its end
-        except KeyboardInterrupt:       # one just before (writing the marker): the sweep's line too
+        except KeyboardInterrupt:       # one just before (writing the marker): its one line too
             with Deferred(second_raises=False):
-                return _stop_line(_where_kept(staged, f"all {len(rows)} walks"))
+                return report_stop(_where_kept(staged, f"all {len(rows)} walks"))
         except OSError as exc:
             return _not_written(staged, exc, f"all {len(rows)} walks")
     print(summary_line(rows, {"csv": out / SWEEP_CSV, "png": out / SWEEP_PNG}))
@@ -135,23 +136,10 @@ def _where_kept(staged, what: str) -> str:
         return f"{what} left in {staged.path}" if staged.path is not None else "nothing written"
 
 
-def _stop_line(where: str) -> int:
-    """The sweep's one line for Ctrl-C (exit 130) or SIGTERM (exit 143; docs/sweep.md), ``where``
-    saying where the finished walks are."""
-    from ..stop_signals import terminated
-    line = "terminated (SIGTERM)" if terminated() else "interrupted (Ctrl-C)"
-    print(f"{PROG}: {line}" + (f"; {where}" if where else ""), file=sys.stderr)
-    return EXIT_TERMINATED if terminated() else EXIT_INTERRUPTED
-
-
 def _not_written(staged, exc: OSError, what: str) -> int:
     """A file of the sweep could not be written (a full disk, a permission, a folder removed):
     the one line names the file and the cause, what was written is kept; exit 74."""
-    from ..errors import os_error_text
     staging = staged.path
     where = _where_kept(staged, what)
-    text = os_error_text(exc) if exc.filename is not None else f"the results: {os_error_text(exc)}"
-    if staging is not None and staged.kept is not None:     # the file as it is named now
-        text = text.replace(str(staging), str(staged.kept))
-    print(f"{PROG}: error: could not write {text}; the sweep stopped; {where}", file=sys.stderr)
+    print(f"{PROG}: error: {could_not_write(unwritten(exc), where, staging, staged.kept)}", file=sys.stderr)
     return EXIT_WRITE_FAILED

@@ -169,7 +169,7 @@ class RunWriter:
         if walk is None or not self.folder.is_dir():      # a folder removed is not made again
             return
         summary = self._summary(walk)
-        summary["status"], summary["message"] = "incomplete", f"writing the results failed: {text}"
+        summary["status"], summary["message"] = "incomplete", f"could not write {text}"
         try:
             atomic_write_bytes(self.folder / SUMMARY_FILE, summary_text(summary).encode("utf-8"))
         except Exception:   # noqa: BLE001 - the first failure is the one to report
