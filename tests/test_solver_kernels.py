@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from klaw_ocp.config import load_config
-from klaw_ocp.solvers import MultipleShootingSolver, integrator, ipopt_nlp, kernels
+from klaw_ocp.solvers import MultipleShootingSolver, integrator, ipopt_nlp, kernel_calls, kernels
 from klaw_ocp.solvers.integrator import SubphaseKernels, rk4_interval, subphase_kernels
 from klaw_ocp.walk import simulate_walk, walk_spec
 
@@ -336,7 +336,7 @@ def test_a_walk_without_a_compiler_is_the_same_walk(monkeypatch):
         loaded.append(self)
         return lib
     monkeypatch.setattr(kernels.KernelLibrary, "load", spy_load)
-    for cls in (kernels._CFunction, kernels._CasadiFunction):   # who evaluates the kernels' calls
+    for cls in (kernel_calls.CompiledFunction, kernel_calls.CasadiFunction):   # who evaluates the kernels' calls
         def counted(self, *args, _call=cls.__call__, _name=cls.__name__):
             calls[_name] += 1
             return _call(self, *args)
@@ -362,11 +362,11 @@ def test_a_walk_without_a_compiler_is_the_same_walk(monkeypatch):
     # ... compiled and loaded from the cache in the first, every kernel call into the C library ...
     for name, (compiled, path) in libraries.items():
         assert compiled and path is not None and path.is_file() and path.parent == kernels.cache_dir(), name
-    assert c_calls.get("_CFunction", 0) > 0 and c_calls.get("_CasadiFunction", 0) == 0, c_calls
+    assert c_calls.get("CompiledFunction", 0) > 0 and c_calls.get("CasadiFunction", 0) == 0, c_calls
     # ... and evaluated by CasADi in the second, nothing compiled or loaded
     libraries, casadi_calls = used["0"]
     assert all(not compiled and path is None for compiled, path in libraries.values()), libraries
-    assert casadi_calls.get("_CasadiFunction", 0) > 0 and casadi_calls.get("_CFunction", 0) == 0, casadi_calls
+    assert casadi_calls.get("CasadiFunction", 0) > 0 and casadi_calls.get("CompiledFunction", 0) == 0, casadi_calls
     # The same walks. The kernels agree to round-off (1e-11, test_compiled_and_casadi_evaluation_agree;
     # bit for bit on x86-64 today, but a compiler may contract a*b+c into an FMA); the solvers then
     # stop at |residual| < 1e-10, so a round-off difference can at most end a solve an iteration
@@ -480,7 +480,7 @@ def test_prepare_compiles_every_subphase_at_once(tmp_path, monkeypatch):
         for spec in specs:
             k = subphase_kernels(spec, 4, 20)        # what prepare loaded (the per-process cache)
             assert k.library.compiled and k.library.path in libraries
-            assert isinstance(k.final, kernels._CFunction), "the kernels call the compiled library"
+            assert isinstance(k.final, kernel_calls.CompiledFunction), "the kernels call the compiled library"
             x, c = rng.uniform(-0.5, 0.5, spec.nx), rng.uniform(0.5, 1.0, spec.nc)
             np.testing.assert_allclose(k.final(x, c)[0], np.asarray(spec.final(x, c)).ravel(),
                                        rtol=1e-12, atol=1e-12, err_msg=spec.name)

@@ -5,7 +5,11 @@ from .errors import ConfigError, ConvergenceError, GaitLimitError, KlawError
 
 def simulate_walk(spec, method=None, progress=False, raise_on_failure=True, on_step=None):
     """Run a walk (see :func:`klaw_ocp.walk.simulate_walk`); imported lazily to keep
-    ``import klaw_ocp`` free of CasADi builds."""
+    ``import klaw_ocp`` free of CasADi builds.
+
+    Thread-safe: several threads may call it at once, each walk the walk it would be alone to
+    the last bit, at no measurable cost to a walk (docs/limits.md, "Threads"). Threads do not
+    make walks faster (most of a walk holds the GIL); processes do."""
     from .walk import simulate_walk as run
     return run(spec, method=method, progress=progress, raise_on_failure=raise_on_failure, on_step=on_step)
 

@@ -14,6 +14,7 @@ pause a first run makes, compiling the solver kernels, is announced before it st
 - :class:`CasadiMessages`: CasADi writes its warnings through Python's ``sys.stderr``
   (``CasADi - <date> <time> WARNING("...") [file:line]``); while a walk runs, those lines are
   taken out of the stream and kept (without the date, once each); every other line goes through.
+  Walks in several threads at once each keep the lines written from their own thread.
 - :class:`CompileNotice`: a listener for :func:`klaw_ocp.solvers.kernels.compile_notices` that
   says, on one line on stderr, that the kernels are being compiled once for this machine, how
   long that takes and where they are kept, once, before the pause.
@@ -43,33 +44,31 @@ class DeferredInterrupt(Deferred):
     KeyboardInterrupt then; a second one raises at once (:class:`klaw_ocp.stop_signals.Deferred`)."""
 
 
-class CasadiMessages(io.TextIOBase):
-    """Context manager that stands in for ``sys.stderr``: CasADi's lines go to :attr:`messages`."""
+class CasadiMessages:
+    """Context manager: while it is open, CasADi's lines written from this thread go to
+    :attr:`messages`; every other line goes on to the stream that was ``sys.stderr``.
+
+    ``sys.stderr`` is one for the process, and walks may run in several threads at once: the
+    first open collector puts one stand-in in its place (:class:`_StderrStandIn`), which hands
+    each line to the collector of the thread that wrote it (CasADi writes from the thread whose
+    call warns), and the last one to close puts the stream back. Two threads that each swapped
+    ``sys.stderr`` themselves would restore each other's stand-in, and a walk would keep another
+    walk's warnings."""
 
     def __init__(self):
-        super().__init__()
         self.messages: list[str] = []
         self._target = None
         self._partial = ""
 
     def __enter__(self) -> "CasadiMessages":
-        self._target = sys.stderr
-        sys.stderr = self
+        self._target = _StderrStandIn.attach(self)
         return self
 
     def __exit__(self, *exc) -> None:
-        if sys.stderr is self:
-            sys.stderr = self._target
+        _StderrStandIn.detach(self)
         if self._partial:
             self._line(self._partial, end="")
             self._partial = ""
-
-    def writable(self) -> bool:
-        return True
-
-    @property
-    def encoding(self):
-        return getattr(self._target, "encoding", "utf-8")
 
     def write(self, text: str) -> int:
         self._partial += text
@@ -89,15 +88,73 @@ class CasadiMessages(io.TextIOBase):
         else:
             self._target.write(line + end)
 
+
+class _StderrStandIn(io.TextIOBase):
+    """What ``sys.stderr`` is while collectors are open: each thread's writes go to its innermost
+    open :class:`CasadiMessages` (an ``on_step`` may run a walk of its own), a thread without one
+    writes straight through. It stays usable after it is taken off (a progress bar made during
+    the walk closes after it), writing through to the stream it replaced."""
+
+    _lock = threading.Lock()
+    _current: "_StderrStandIn | None" = None
+
+    def __init__(self, target):
+        super().__init__()
+        self.target = target
+        self.open = 0
+        self._collectors: dict[int, list] = {}   # thread ident -> its open collectors, innermost last
+
+    @classmethod
+    def attach(cls, collector: CasadiMessages):
+        """Route this thread's writes to ``collector``; the stream it writes other lines to."""
+        with cls._lock:
+            stand_in = cls._current
+            if stand_in is None:
+                stand_in = cls._current = cls(sys.stderr)
+                sys.stderr = stand_in
+            stand_in.open += 1
+            stand_in._collectors.setdefault(threading.get_ident(), []).append(collector)
+            return stand_in.target
+
+    @classmethod
+    def detach(cls, collector: CasadiMessages) -> None:
+        with cls._lock:
+            stand_in = cls._current
+            if stand_in is None:
+                return
+            stack = stand_in._collectors.get(threading.get_ident(), [])
+            if collector in stack:
+                stack.remove(collector)
+                stand_in.open -= 1
+            if not stack:
+                stand_in._collectors.pop(threading.get_ident(), None)
+            if stand_in.open == 0:
+                cls._current = None
+                if sys.stderr is stand_in:     # else someone replaced it meanwhile: theirs stays
+                    sys.stderr = stand_in.target
+
+    def write(self, text: str) -> int:
+        stack = self._collectors.get(threading.get_ident())
+        if stack:
+            return stack[-1].write(text)
+        self.target.write(text)
+        return len(text)
+
+    def writable(self) -> bool:
+        return True
+
+    @property
+    def encoding(self):
+        return getattr(self.target, "encoding", "utf-8")
+
     def flush(self) -> None:
-        if self._target is not None:
-            self._target.flush()
+        self.target.flush()
 
     def fileno(self) -> int:
-        return self._target.fileno()
+        return self.target.fileno()
 
     def isatty(self) -> bool:
-        return self._target.isatty()
+        return self.target.isatty()
 
 
 class CompileNotice:

@@ -124,8 +124,9 @@ def default_out_dir(config) -> Path:
 
 # ------------------------------------------------------------------------------------ one walk
 
-#: One walk at a time per process: CasADi plugins (IPOPT's linear solver) are not thread-safe,
-#: and a dask worker may run several tasks in threads of one process.
+#: One walk at a time per process, although walks are thread-safe (docs/limits.md, "Threads"):
+#: a dask worker may run several tasks in threads of one process, whose walks would mostly take
+#: turns on the GIL and each count the others' turns in its row's wall_s.
 _WALK_LOCK = threading.Lock()
 
 

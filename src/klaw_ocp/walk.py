@@ -37,6 +37,7 @@ from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
+from .solvers.thread_safety import solving
 from .stop_signals import stopped_words
 
 
@@ -147,8 +148,23 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     Every argument is checked before anything is built or solved: a bad one raises
     :class:`~klaw_ocp.errors.ConfigError` (one line naming it and what is allowed;
     :class:`~klaw_ocp.errors.GaitLimitError`, a kind of ConfigError, for a walk outside the
-    supported envelope)."""
+    supported envelope).
+
+    Threads: it may be called from several threads at once, and each walk is the walk it would
+    be alone, to the last bit (docs/limits.md, "Threads"). Walks in several threads run at the
+    same time (the compiled kernels' C code in parallel, the Python in turns under the GIL;
+    CasADi's expressions are built and IPOPT solves one at a time for the process); each keeps
+    the CasADi warnings of its own thread; ``compile_s`` counts any compiling the walk waited
+    for, another thread's included. Ctrl-C is deferred to the end of the step only in the main
+    thread."""
     spec = _checked_spec(spec, method, progress, raise_on_failure, on_step)
+    with solving():     # one walk at a time only with a CasADi that is not thread-safe
+        return _simulate(spec, progress, raise_on_failure, on_step)
+
+
+def _simulate(spec: WalkSpec, progress: bool, raise_on_failure: bool, on_step) -> Walk:
+    """:func:`simulate_walk` of a checked spec (its clock starts here: a turn waited for is not
+    the walk's time)."""
     wall0, compile0 = time.perf_counter(), compile_seconds()
     walk = Walk(spec)
     outside = 0.0       # seconds spent in on_step, kept out of wall_s

@@ -18,10 +18,9 @@ and the step's numbers.
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 
+from ..casadi_builds import built_once
 from ..body import DYNAMIC_PARAMETER_NAMES
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from .layout import VectorLayout
@@ -56,7 +55,7 @@ def hip_height(x):
     return pos[1], vel[1]
 
 
-@lru_cache(maxsize=None)
+@built_once
 def hip_height_function(nodes: int) -> ca.Function:
     """:func:`hip_height` of ``nodes`` stance states at once: ``X[6, nodes] -> (y, yd)``."""
     x = ca.SX.sym("x", 6)

@@ -21,12 +21,11 @@ The paper's lock rules:
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 import numpy as np
 
 from .. import choices
+from ..casadi_builds import built_once
 from ..dynamics import impact_functions
 from ..dynamics.parameters import N_BODY_PARAMETERS
 from ..solvers.problem import Event, SubphaseSpec
@@ -117,7 +116,7 @@ def stance_fixed(at_rest: bool = False) -> tuple:
     return tuple(n in PA_KNOTS for n in stance_unknowns(at_rest))
 
 
-@lru_cache(maxsize=None)
+@built_once
 def stance_spec(lock_rule: str = choices.DEFAULT_LOCK_RULE, at_rest: bool = False) -> SubphaseSpec:
     """The stance :class:`SubphaseSpec` (built once per lock rule).
 

@@ -14,11 +14,10 @@
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 
 from .. import choices
+from ..casadi_builds import built_once
 from ..solvers.problem import SubphaseSpec
 from . import swing_law as law
 from .stance_law import STANCE_CONTEXT, stance_plausible
@@ -49,7 +48,7 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
     )
 
 
-@lru_cache(maxsize=None)
+@built_once
 def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
     """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
     theta3_error = lambda x, c: x[6] - law.names(c).theta3_target

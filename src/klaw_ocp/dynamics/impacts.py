@@ -52,12 +52,11 @@ When the stance leg locks (wd -> 0, section 4.2) or the knee locks (theta4d -> 0
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 import numpy as np
 
 from .. import choices
+from ..casadi_builds import built_once
 from ..errors import ConfigError, out_of_range
 from ._checks import as_vector, check_body, choice
 from .evaluate import evaluate
@@ -108,7 +107,7 @@ def momentum_lock_sx(mass, qd, index: int):
     return ca.vertcat(*out)
 
 
-@lru_cache(maxsize=None)
+@built_once
 def impact_functions() -> dict:
     """CasADi Functions of the maps, built once: ``heel_strike(x, offset) -> x_post``,
     ``stance_lock(x, p) -> x_post`` and ``knee_lock(x, p) -> x_post`` (momentum rule)."""

@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import math
 
-from functools import lru_cache
-
 import casadi as ca
 import numpy as np
 
+from ..casadi_builds import built_once
 from ._checks import as_scalar, as_vector, check_body, to_numpy
 from .evaluate import evaluate
 from .stance import stance_functions
@@ -141,7 +140,7 @@ def stance_hips(body, states, ankle) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(ankle, float) + pos.reshape(n, 2), vel.reshape(n, 2)
 
 
-@lru_cache(maxsize=None)
+@built_once
 def _hip_map(n: int):
     return stance_functions()["hip"].map(n)
 

@@ -16,10 +16,9 @@ the mass matrix become (1, 0, 0) and b1 = 0, hence wdd = 0 (ERRATA 3). ``locked`
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 
+from ..casadi_builds import built_once
 from .lagrange import lagrange_mass_bias, point_velocity
 from .parameters import N_BODY_PARAMETERS, body_symbols
 
@@ -69,7 +68,7 @@ def apply_lock(mass, rhs, locked, index: int):
     return sel @ mass @ sel + locked * (unit @ unit.T), sel @ rhs
 
 
-@lru_cache(maxsize=None)
+@built_once
 def _mass_bias_function() -> ca.Function:
     q, qd, p = ca.SX.sym("q", N_Q), ca.SX.sym("qd", N_Q), ca.SX.sym("p", N_BODY_PARAMETERS)
     return ca.Function("stance_mass_bias", [q, qd, p], [*stance_mass_bias(q, qd, p)])
@@ -94,7 +93,7 @@ def hip_kinematics_sx(q, qd, qdd):
     return pos, vel, acc
 
 
-@lru_cache(maxsize=None)
+@built_once
 def stance_functions() -> dict:
     """CasADi Functions of the stance model, built once per process.
 

@@ -12,10 +12,9 @@ The locked knee (eq. 5): a22 = 1, b2 = a12 = a21 = 0, i.e. theta4dd = 0.
 """
 from __future__ import annotations
 
-from functools import lru_cache
-
 import casadi as ca
 
+from ..casadi_builds import built_once
 from .lagrange import lagrange_mass_bias, point_velocity
 from .parameters import N_BODY_PARAMETERS, body_symbols
 from .stance import apply_lock
@@ -67,7 +66,7 @@ def swing_mass_bias(q, qd, hip_acc, p):
     return ca.simplify(mass), ca.simplify(bias)
 
 
-@lru_cache(maxsize=None)
+@built_once
 def _mass_bias_function() -> ca.Function:
     q, qd = ca.SX.sym("q", N_Q), ca.SX.sym("qd", N_Q)
     hip_acc, p = ca.SX.sym("hip_acc", 2), ca.SX.sym("p", N_BODY_PARAMETERS)
@@ -83,7 +82,7 @@ def swing_accelerations_sx(q, qd, force, hip_acc, p, locked=0):
     return ca.solve(mass, rhs)
 
 
-@lru_cache(maxsize=None)
+@built_once
 def swing_functions() -> dict:
     """CasADi Functions of the swing model, built once per process.
 

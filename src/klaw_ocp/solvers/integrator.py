@@ -12,11 +12,11 @@ machine (:mod:`.kernels`, docs/performance.md).
 from __future__ import annotations
 
 import sys
-from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
+from ..casadi_builds import built_once
 from .kernels import KernelLibrary, prefetch, source_key
 from .problem import SubphaseSpec, mapped
 
@@ -171,7 +171,7 @@ def prepare_kernels(specs, substeps: int, intervals: int) -> None:
     prefetch([subphase_kernels(spec, substeps, intervals).load for spec in specs])
 
 
-@lru_cache(maxsize=None)
+@built_once
 def subphase_kernels(spec: SubphaseSpec, substeps: int, intervals: int) -> SubphaseKernels:
     """The kernels of a spec on N intervals, built or loaded once per process."""
     return SubphaseKernels(spec, substeps, intervals)

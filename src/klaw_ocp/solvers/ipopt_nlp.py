@@ -20,11 +20,11 @@ near a small-residual optimum.
 from __future__ import annotations
 
 import sys
-from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
+from ..casadi_builds import built_once
 from . import integrator
 from .integrator import rk4_interval
 from .kernels import KernelLibrary, source_key
@@ -120,7 +120,7 @@ def _build(spec: SubphaseSpec, n: int, substeps: int, compiling: bool) -> list:
                         ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])]
 
 
-@lru_cache(maxsize=None)
+@built_once
 def ipopt_solver(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int) -> ca.Function:
     """IPOPT on the subphase's multiple-shooting NLP (built or loaded once per process)."""
     parts = [source_key(sys.modules[__name__], integrator), "ipopt", spec.name, spec.nx, spec.nu, spec.nc, substeps, intervals]

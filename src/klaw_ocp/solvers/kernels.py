@@ -15,7 +15,7 @@ costs tens of microseconds of conversion. A :class:`KernelLibrary` therefore
    the first time on a machine; ``-O3`` gains nothing more;
 3. calls the compiled functions through ``ctypes`` with preallocated work arrays (about 2 us a
    call), or, without a working compiler (or with ``KLAW_OCP_JIT=0``), the same Functions
-   through CasADi: everything runs, only slower.
+   through CasADi: everything runs, only slower (:mod:`.kernel_calls`).
 
 The cache folder is ``$KLAW_OCP_CACHE_DIR``, else ``$XDG_CACHE_HOME/klaw_ocp``, else
 ``~/.cache/klaw_ocp``. Several processes (sweep workers) may build the same library at once:
@@ -33,8 +33,11 @@ Compiling takes seconds where everything else takes milliseconds, so it is annou
 :func:`compile_seconds` is the wall time spent compiling (a walk's ``compile_s``).
 
 Arrays cross this boundary flat, in CasADi's column-major order: an (nx, N) matrix is a numpy
-array of shape (N, nx) in C order. A kernel's work arrays are its own, so one kernel object must
-not be called from two threads at once (parallel sweeps use processes).
+array of shape (N, nx) in C order. One kernel object serves every thread of the process: each
+thread calls it with work arrays of its own (:mod:`.kernel_calls`), so walks in several threads
+run their kernels at the same time (docs/limits.md, "Threads"). Libraries are loaded once, under
+a lock per library; CasADi expressions are built and C generated one at a time for the process
+(:mod:`klaw_ocp.casadi_builds`), while the compilers run in parallel (:func:`prefetch`).
 """
 from __future__ import annotations
 
@@ -54,16 +57,15 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 import casadi as ca
-import numpy as np
+
+from ..casadi_builds import BUILD_LOCK
+from .kernel_calls import CasadiFunction, CompiledFunction
 
 #: bump when the generated functions change in a way their key does not capture (the source of
 #: the modules that build them is part of the key already, see :func:`source_key`)
 GENERATOR_VERSION = "1"
 FLAGS = ("-O2", "-fPIC", "-shared")
 _DISABLED = ("0", "off", "false", "no")
-#: CasADi expressions are built and code is generated one thread at a time (CasADi's symbolic
-#: layer is not thread-safe); compilers run in parallel (:func:`prefetch`)
-_casadi_lock = threading.RLock()
 _compiler_state: dict = {}
 #: who is told that compiling starts (:func:`compile_notices`), and the compile clock: how many
 #: libraries compile right now, since when, and the seconds of the finished bursts
@@ -157,79 +159,6 @@ def _compiler_identity(cc: str) -> str:
     return _compiler_state[cc]
 
 
-class _CFunction:
-    """One compiled CasADi function called through ctypes (dense inputs and outputs)."""
-
-    def __init__(self, lib: ctypes.CDLL, name: str):
-        self.name = name
-        self._fn = getattr(lib, name)
-        self._fn.restype = ctypes.c_int
-        self._fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int]
-        n_in, n_out = (getattr(lib, f"{name}_n_{s}") for s in ("in", "out"))
-        n_in.restype = n_out.restype = ctypes.c_longlong
-        sparsity = {}
-        for side, count in (("in", n_in()), ("out", n_out())):
-            fn = getattr(lib, f"{name}_sparsity_{side}")
-            fn.restype = ctypes.POINTER(ctypes.c_longlong)
-            fn.argtypes = [ctypes.c_longlong]
-            sparsity[side] = [self._dense_size(fn(i), side, i) for i in range(count)]
-        self.sizes_in, self.sizes_out = sparsity["in"], sparsity["out"]
-        work = getattr(lib, f"{name}_work")
-        sizes = [ctypes.c_longlong() for _ in range(4)]
-        work(*[ctypes.byref(s) for s in sizes])
-        sz_arg, sz_res, sz_iw, sz_w = (max(int(s.value), 1) for s in sizes)
-        self._arg = (ctypes.c_void_p * sz_arg)()
-        self._res = (ctypes.c_void_p * sz_res)()
-        self._iw = np.zeros(sz_iw, dtype=np.int64)
-        self._w = np.zeros(sz_w)
-        # the inputs and outputs cross in arrays of their own, whose addresses are set once:
-        # looking up a numpy array's address costs 3 us, copying a few hundred numbers into one
-        # a fraction of that, and a kernel is called 650 times a walk
-        self._inputs = [np.zeros(size) for size in self.sizes_in]
-        self._outputs = [np.zeros(size) for size in self.sizes_out]
-        for i, buffer in enumerate(self._inputs):
-            self._arg[i] = buffer.ctypes.data
-        for i, buffer in enumerate(self._outputs):
-            self._res[i] = buffer.ctypes.data
-        self._iw_address, self._w_address = self._iw.ctypes.data, self._w.ctypes.data
-        incref = getattr(lib, f"{name}_incref", None)
-        if incref is not None:
-            incref()
-        checkout = getattr(lib, f"{name}_checkout", None)
-        self._mem = int(checkout()) if checkout is not None else 0
-
-    def _dense_size(self, pattern, side: str, i: int) -> int:
-        rows, cols = int(pattern[0]), int(pattern[1])
-        if rows * cols and int(pattern[2]) != 1:   # CasADi's compact form marks a dense pattern with 1
-            raise ValueError(f"{self.name}: {side}put {i} is sparse; kernels take and return dense arrays")
-        return rows * cols
-
-    def __call__(self, *inputs) -> list:
-        for i, (x, buffer) in enumerate(zip(inputs, self._inputs)):
-            a = np.asarray(x, dtype=float).reshape(-1)   # C order, as the docstring says
-            if a.size != buffer.size:
-                raise ValueError(f"{self.name}: input {i} has {a.size} entries, expected {buffer.size}")
-            buffer[:] = a
-        status = self._fn(self._arg, self._res, self._iw_address, self._w_address, self._mem)
-        if status:
-            raise RuntimeError(f"{self.name}: compiled evaluation failed (status {status})")
-        return [buffer.copy() for buffer in self._outputs]
-
-
-class _CasadiFunction:
-    """The same calling convention on a CasADi Function (no compiler)."""
-
-    def __init__(self, fn: ca.Function):
-        self.name, self._fn = fn.name(), fn
-        self._shapes = [(fn.size1_in(i), fn.size2_in(i)) for i in range(fn.n_in())]
-        self.sizes_in = [r * c for r, c in self._shapes]
-        self.sizes_out = [fn.numel_out(i) for i in range(fn.n_out())]
-
-    def __call__(self, *inputs) -> list:
-        args = [np.asarray(x, float).reshape(c, r).T for x, (r, c) in zip(inputs, self._shapes)]
-        return [np.asarray(ca.densify(out)).ravel(order="F") for out in self._fn.call(args)]
-
-
 class KernelCacheNote(RuntimeWarning):
     """A cached kernel library was damaged or would not load, and was rebuilt (one line)."""
 
@@ -274,7 +203,7 @@ class KernelLibrary:
         self.compiled = False
 
     def _casadi_functions(self, compiling: bool = False) -> dict:
-        with _casadi_lock:
+        with BUILD_LOCK:   # CasADi expressions and their C one at a time (klaw_ocp.casadi_builds)
             if self._functions is None:
                 self._functions = {fn.name(): fn for fn in self._build(compiling)}
                 if tuple(self._functions) != self.names:
@@ -347,7 +276,7 @@ class KernelLibrary:
     def _compile(self, cc: str, folder: Path, path: Path) -> None:
         with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
             source = Path(tmp) / "kernels.c"
-            with _casadi_lock:
+            with BUILD_LOCK:
                 generator = ca.CodeGenerator(source.name, {"with_header": False})
                 for fn in self._casadi_functions(compiling=True).values():
                     generator.add(fn)
@@ -377,8 +306,8 @@ class KernelLibrary:
         """name -> callable on flat numpy arrays (compiled when possible; dense arrays only)."""
         lib = self.load()
         if lib is not None:
-            return {n: _CFunction(lib, n) for n in self.names}
-        return {n: _CasadiFunction(fn) for n, fn in self._casadi_functions().items()}
+            return {n: CompiledFunction(lib, n) for n in self.names}
+        return {n: CasadiFunction(fn) for n, fn in self._casadi_functions().items()}
 
     def casadi_external(self, name: str) -> ca.Function:
         """A function as a CasADi Function (for nlpsol): the compiled one, else the built one."""

@@ -34,6 +34,7 @@ from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
 from .newton import CONTRACTION, CondensedNewton
 from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
+from .thread_safety import IPOPT_LOCK
 
 
 class _Call:
@@ -284,8 +285,9 @@ class MultipleShootingSolver:
             if spec.path is not None:
                 lbg = np.concatenate([lbg, lower.T.ravel()])
                 ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
-            sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
-            stats = solver.stats()
+            with IPOPT_LOCK:   # one IPOPT at a time, and these statistics this solve's (.thread_safety)
+                sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
+                stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
             z0 = np.asarray(sol["x"]).ravel()
             result = self._finish(pb, z0[: n * spec.nx], z0[n * spec.nx:], iterations, call,

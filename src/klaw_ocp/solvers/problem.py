@@ -19,11 +19,12 @@ from __future__ import annotations
 import math
 
 from dataclasses import dataclass, field, fields
-from functools import lru_cache
 from typing import Callable, Optional, Sequence
 
 import casadi as ca
 import numpy as np
+
+from ..casadi_builds import built_once
 
 
 @dataclass(frozen=True)
@@ -211,7 +212,7 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
     return np.array(nodes)
 
 
-@lru_cache(maxsize=None)
+@built_once
 def mapped(fn: ca.Function, n: int) -> ca.Function:
     """``fn`` evaluated on n columns in one call (vector inputs given once are broadcast)."""
     return fn.map(n)
