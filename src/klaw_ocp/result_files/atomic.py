@@ -22,7 +22,9 @@ def naming(path):
     try:
         yield
     except OSError as exc:
-        if exc.filename is None:
+        # only an error from the system (an errno): one raised with a message alone would print
+        # as "[Errno None] None: <file>", its message lost
+        if exc.filename is None and exc.errno is not None:
             exc.filename = os.fspath(path)
         raise
 
@@ -46,7 +48,7 @@ def atomic_path(path: Path, suffix: str = ".tmp"):
         if tmp is not None:
             with suppress(OSError):          # a folder removed meanwhile has no temporary left
                 os.unlink(tmp)
-        if isinstance(exc, OSError) and (exc.filename is None or os.fspath(exc.filename) == tmp):
+        if isinstance(exc, OSError) and exc.errno is not None and (exc.filename is None or os.fspath(exc.filename) == tmp):
             exc.filename, exc.filename2 = os.fspath(path), None
         raise
 
