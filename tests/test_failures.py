@@ -15,7 +15,6 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -24,6 +23,8 @@ import yaml
 
 from klaw_ocp.cli import main
 from klaw_ocp.errors import Interrupted, failure_cause
+
+from _slow_cli import slow_cli_script
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -183,19 +184,7 @@ def test_a_forced_failure_keeps_every_completed_step(tmp_path, capsys, fail_at_s
 
 #: A walk of many slowed-down steps in a process of its own, with Python's own Ctrl-C handler
 #: (a shell's background job would ignore SIGINT).
-SLOW_RUN = textwrap.dedent("""
-    import signal, sys, time
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    from klaw_ocp.control.step import StepController
-    original = StepController.solve_step
-    def slow(self, *args, **kwargs):
-        result = original(self, *args, **kwargs)
-        time.sleep(0.5)
-        return result
-    StepController.solve_step = slow
-    from klaw_ocp.cli import main
-    sys.exit(main(sys.argv[1:]))
-""")
+SLOW_RUN = slow_cli_script(0.5)
 
 
 def _wait_for_steps(folder_glob, parent: Path, steps: int, process, timeout: float = 300.0) -> Path:

@@ -19,7 +19,6 @@ import pickle
 import shutil
 import subprocess
 import sys
-import textwrap
 
 import pytest
 
@@ -29,6 +28,7 @@ from klaw_ocp.errors import os_error_text
 from klaw_ocp.result_files import atomic, run_writer
 from klaw_ocp.result_files.atomic import atomic_write_bytes
 
+from _slow_cli import slow_cli_script
 from test_failures import _config, _env, _lines, _wait_for_steps
 
 
@@ -197,18 +197,7 @@ def test_a_failed_write_names_the_file_not_its_temporary(tmp_path, monkeypatch):
 
 
 #: a run whose steps are slowed down and whose staging folder the test removes after step 1
-SLOW_RUN = textwrap.dedent("""
-    import sys, time
-    from klaw_ocp.control.step import StepController
-    original = StepController.solve_step
-    def slow(self, *args, **kwargs):
-        result = original(self, *args, **kwargs)
-        time.sleep(0.3)
-        return result
-    StepController.solve_step = slow
-    from klaw_ocp.cli import main
-    sys.exit(main(sys.argv[1:]))
-""")
+SLOW_RUN = slow_cli_script(0.3)
 
 
 def test_a_folder_removed_while_the_run_writes_is_one_line_and_exit_74(tmp_path):
