@@ -169,6 +169,7 @@ def swing_context(**values):
                toe_off_time=0.1, swing_end_time=0.6, foot_t_toe_off=0.1, foot_t1=0.35, foot_t2=0.5, foot_t_heel_strike=0.6,
                foot_theta5_toe_off=1.4, foot_theta6_toe_off=0.5, foot_theta5_t1=1.6, foot_theta5_heel_strike=1.57,
                foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, k_h=80.0, d_h=9.0, theta3_target=-0.3, tau3=0.05,
+               exp3_mean=0.2, exp4_mean=0.3,
                P0=0.0, P1=0.0, P2=0.0, P3=0.0, P4=0.1, curve_x0=0.0, baumgarte=50.0, swing2_start=0.35, tau4=0.04,
                pelvis_width=0.18, pelvis_rotation_start=0.0, pelvis_rotation_end=0.0, pelvis_list=0.0)
     ctx.update(values)
@@ -178,25 +179,28 @@ def swing_context(**values):
 def test_swing_torques_are_the_paper_shapes():
     c = swing_context()
     nc = len(SWING_CONTEXT)
-    # swing1: F_theta3 (ERRATA 7) is a decaying exponential from toe-off, time constant tau3
-    s1 = as_function(swing1_forces, 9, 1, 1, nc)
+    # swing1: F_theta3 (ERRATA 7) is a decaying exponential from toe-off, time constant tau3, about
+    # its mean: mean + fall (exp(-(t - t_to) / tau3) - exp3_mean)
+    s1 = as_function(swing1_forces, 9, 1, 2, nc)
     x1 = np.array([0.86, 0.1, 0.02, 0.05, 1.2, -0.1, 0.2, 0.5, -2.0])
-    assert s1(x1, 0.1, [7.0], c)[0][4] == pytest.approx(7.0)
-    assert s1(x1, 0.15, [7.0], c)[0][4] == pytest.approx(7.0 / math.e)
-    assert s1(x1, 0.15, [7.0], c)[0][5] == 0.0                    # the knee is driven, not torqued
+    assert s1(x1, 0.1, [7.0, 0.0], c)[0][4] == pytest.approx(7.0 * (1 - 0.2))
+    assert s1(x1, 0.15, [7.0, 0.0], c)[0][4] == pytest.approx(7.0 * (1 / math.e - 0.2))
+    assert s1(x1, 0.15, [7.0, 3.0], c)[0][4] == pytest.approx(3.0 + 7.0 * (1 / math.e - 0.2))
+    assert s1(x1, 0.15, [7.0, 3.0], c)[0][5] == 0.0               # the knee is driven, not torqued
     # ... and the dynamics feel the same torque: with the knee locked (eq. 5) theta3's acceleration
     # gains F_theta3 / a11, a11 = I3 + I4 + m3 r3^2 + m4 (l3^2 + r4^2 + 2 l3 r4 cos theta4) (A.2)
-    rhs = as_function(swing1_rhs, 9, 1, 1, nc)
-    gain = lambda t: rhs(x1, t, [7.0], c)[0][8] - rhs(x1, t, [0.0], c)[0][8]
+    rhs = as_function(swing1_rhs, 9, 1, 2, nc)
+    gain = lambda t: rhs(x1, t, [7.0 / 0.8, 0.0], c)[0][8] - rhs(x1, t, [0.0, 0.0], c)[0][8]
     b = BODY
     a11 = b.I3 + b.I4 + b.m3 * b.r3 ** 2 + b.m4 * (b.l3 ** 2 + b.r4 ** 2 + 2 * b.l3 * b.r4 * math.cos(0.5))
-    assert gain(0.1) == pytest.approx(7.0 / a11) and gain(0.15) == pytest.approx(7.0 / a11 / math.e)
+    assert gain(0.1) == pytest.approx(7.0 / a11)
+    assert gain(0.15) == pytest.approx(7.0 / 0.8 * (1 / math.e - 0.2) / a11)
     # swing2: hold spring-damper about theta3_target + actuator; F_theta4 decays from t1 with tau4
-    s2 = as_function(swing2_torques, 10, 1, 2, nc)
+    s2 = as_function(swing2_torques, 10, 1, 3, nc)
     x2 = np.r_[x1[:6], -0.25, 0.9, 0.4, -3.0]
-    f3, f4 = s2(x2, 0.39, [-4.0, -0.02], c)
+    f3, f4 = s2(x2, 0.39, [-4.0, -0.02, 1.5], c)
     assert f3[0] == pytest.approx(80.0 * (-0.3 - 0.02 + 0.25) - 9.0 * 0.4)
-    assert f4[0] == pytest.approx(-4.0 / math.e)
+    assert f4[0] == pytest.approx(1.5 - 4.0 * (1 / math.e - 0.3))
     # swing3: the same hold (no actuator) plus the constant moment
     s3 = as_function(swing3_torque, 8, 1, 1, nc)
     x3 = np.r_[x1[:6], -0.28, 0.3]

@@ -43,6 +43,7 @@ def test_the_dimensionless_speed_of_the_natural_walk():
 
 from klaw_ocp.human_gait import FIGURES, human_figures          # noqa: E402
 from klaw_ocp.body_motion import body_motion         # noqa: E402
+from klaw_ocp.results import peak_swing_hip_torque              # noqa: E402
 from klaw_ocp.walk import simulate_walk                          # noqa: E402
 
 #: steps per walk: 2 of start and 4 more, so that each leg has steady cycles
@@ -86,14 +87,14 @@ def test_the_stance_leg_has_no_rate_jump(people, speed, most):
 
 
 @pytest.mark.parametrize("speed", [3.0, 5.0, 6.0])
-def test_the_gait_profile_score_is_at_most_8_degrees(people, speed):
+def test_the_gait_profile_score_is_a_healthy_adults(people, speed):
     """Sagittal GPS (Baker 2009) against Schwartz et al.'s curves at the walk's dimensionless
-    speed: at most 8° (people score about 5-6° against a reference group); each GVS at most 8°,
+    speed: at most 6° (issue #36; people score about 5-6° against a reference group); each GVS at most 8°,
     the ankle's at most 9.5°: the pelvic list (the paper's timing, largest at mid-step) lowers the
     swing hip at t1, where the toe under the knee then needs 3-4° more dorsiflexion to clear the
     ground (15° at 6 km/h against people's 1-2°, docs/human-gait.md; issue #36's swing)."""
     f = people[speed]
-    assert f.gps <= 8
+    assert f.gps <= 6
     assert max(value for (_, variable), value in f.gvs.items() if variable != "ankle") <= 8
     assert max(value for (_, variable), value in f.gvs.items() if variable == "ankle") <= 9.5
 
@@ -136,3 +137,20 @@ def test_the_arms_swing_as_people_s_and_more_when_faster(people):
     """Shoulder flexion range 30-40° at 5 km/h (Murray et al. 1967), growing with speed."""
     assert 30 <= people[5.0].worst("shoulder_range", high=False) and people[5.0].worst("shoulder_range") <= 40
     assert people[3.0].mean("shoulder_range") < people[5.0].mean("shoulder_range") < people[6.0].mean("shoulder_range")
+
+
+@pytest.mark.parametrize("speed", [3.0, 5.0, 6.0])
+def test_the_swing_knee_peaks_as_people_s(people, speed):
+    """Issue #36: the swing knee peaks at 55-70° at 67-77 % of the cycle (people: 60-65° at
+    70-73 % at 5 km/h), the thigh at its peak at t1 and the knee extending softly after it."""
+    f = people[speed]
+    assert 55 <= f.worst("knee_swing", high=False) and f.worst("knee_swing") <= 70
+    assert 67 <= f.worst("knee_swing_at", high=False) and f.worst("knee_swing_at") <= 77
+
+
+def test_the_swing_hip_torque_is_a_person_s():
+    """Issue #36: at most 1.5 N m/kg of swing hip torque after the first step of the natural walk
+    (it was 3.5: the thigh swung past its target at t1 and was pulled back)."""
+    walk = simulate_walk({"name": "h", "body": {"height": 1.8, "mass": 80}, "walk": {"speed": 5.0, "steps": STEPS}})
+    peaks = [peak_swing_hip_torque(step, 80.0)["peak_swing_hip_torque_per_kg"] for step in walk.steps[1:]]
+    assert max(peaks) <= 1.5

@@ -17,7 +17,8 @@
    parameters, on torque laws written out here from section 4 (control/stance_law.py and
    swing_law.py describe them) and the equations of motion of ``klaw_ocp.dynamics``; none of the
    solvers' code (RK4 interval, kernels, specs) is used. The final state must meet the subphase's
-   eq. 3 conditions (stance: w, theta1; swing1, swing3: theta3; swing2: theta4 = 0) to
+   eq. 3 conditions (stance: w, theta1; swing1: theta3 and theta3d = 0; swing3: theta3; swing2:
+   theta4 = 0 and theta4d = 0) to
    :data:`FINAL_TOL`, a bound on the solver's own integration error. The initial states and
    contexts are today's walk's (the comparison holds it to the reference). This check found the
    RK4's evaluation of F_theta1's switch at the node (solvers/integrator.py, ``LAST_STAGE``): swing1
@@ -206,6 +207,13 @@ def pelvis_offset(n, t):
     return here, (after - before) / (2 * h), (after - 2 * here + before) / (h * h)
 
 
+def about_mean(t, start, end, tau, fall, mean):
+    """The swing torques' shape, from its definition: a decaying exponential whose time average
+    over [start, end] is ``mean``."""
+    average = tau / (end - start) * (1 - math.exp(-(end - start) / tau))
+    return mean + fall * (math.exp(-(t - start) / tau) - average)
+
+
 def swing_rates(name, t, x, u, n, before_off):
     """The stance carried along (its parameters are in the context) and the swing leg on the
     pelvis's other hip."""
@@ -217,7 +225,7 @@ def swing_rates(name, t, x, u, n, before_off):
     hold = lambda th3, th3d, shift=0.0: n["k_h"] * (n["theta3_target"] + shift - th3) - n["d_h"] * th3d
     if name == "swing1":   # knee locked for the dynamics; theta4 keeps the ankle on curve P
         th3, th4, th3d = x[6:9]
-        f3 = u["F_theta3_magnitude"] * math.exp(-(t - n["toe_off_time"]) / n["tau3"])
+        f3 = about_mean(t, n["toe_off_time"], n["swing2_start"], n["tau3"], u["F_theta3_fall"], u["F_theta3_mean"])
         th3dd = swing_accelerations(BODY, [th3, th4], [th3d, 0.0], [f3, 0.0], hip_acc, True)[0]
         hip = pos + np.array([n["origin_x"], n["origin_y"]])
         e3, e34 = np.array([math.sin(th3), math.cos(th3)]), np.array([math.sin(th3 + th4), math.cos(th3 + th4)])
@@ -230,7 +238,7 @@ def swing_rates(name, t, x, u, n, before_off):
         return np.concatenate([rates, [th3d, th4d, th3dd]])
     if name == "swing2":
         th3, th4, th3d, th4d = x[6:10]
-        f4 = u["F_theta4_magnitude"] * math.exp(-(t - n["swing2_start"]) / n["tau4"])
+        f4 = about_mean(t, n["swing2_start"], n["foot_t2"], n["tau4"], u["F_theta4_fall"], u["F_theta4_mean"])
         qdd = swing_accelerations(BODY, [th3, th4], [th3d, th4d], [hold(th3, th3d, u["hip_actuator"]), f4],
                                   hip_acc, False)
         return np.concatenate([rates, [th3d, th4d], qdd])
@@ -243,7 +251,11 @@ def swing_rates(name, t, x, u, n, before_off):
 def final_conditions(name, x, n):
     if name == "stance":
         return np.array([x[1] - n["theta1_target"], x[0] - n["w_target"]])
-    return np.array([x[7]]) if name == "swing2" else np.array([x[6] - n["theta3_target"]])
+    if name == "swing1":     # the thigh at its target, at rest (its peak)
+        return np.array([x[6] - n["theta3_target"], x[8]])
+    if name == "swing2":     # the knee straight, at rest
+        return np.array([x[7], x[9]])
+    return np.array([x[6] - n["theta3_target"]])
 
 
 def reintegrate(problem, params: dict) -> np.ndarray:

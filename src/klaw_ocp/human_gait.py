@@ -182,6 +182,8 @@ class HumanFigures:
 FIGURES = {
     "knee_mid": ("knee flexion, most near 40 % (35-45 %)", "deg", (0.0, 10.0)),
     "knee_to": ("knee flexion at toe-off", "deg", (30.0, 50.0)),
+    "knee_swing": ("knee flexion, swing peak", "deg", (55.0, 70.0)),
+    "knee_swing_at": ("knee flexion, swing peak: when (% of cycle)", "%", (67.0, 77.0)),
     "thigh_min": ("thigh angle, most extended", "deg", (-20.0, -10.0)),
     "hip_range": ("hip flexion range", "deg", (38.0, 52.0)),
     "ankle_df": ("ankle, most dorsiflexed at 35-55 %", "deg", (8.0, 15.0)),
@@ -237,6 +239,10 @@ def human_figures(walk, motion, start_steps: int = START_STEPS) -> HumanFigures:
         after = _window(t, c.toe_off, c.at(pct_of(c, c.toe_off) + 10.0))
         out.values["knee_mid"].append(float(leg["knee"][mid].max()))
         out.values["knee_to"].append(float(np.interp(c.toe_off, t, leg["knee"])))
+        swing = _window(t, c.toe_off, c.t1)
+        k = swing[int(np.argmax(leg["knee"][swing]))]
+        out.values["knee_swing"].append(float(leg["knee"][k]))
+        out.values["knee_swing_at"].append(float(pct[k]))
         out.values["thigh_min"].append(float(leg["thigh"][idx].min()))
         out.values["hip_range"].append(float(np.ptp(leg["hip"][idx])))
         out.values["ankle_df"].append(float(leg["ankle"][late].max()))

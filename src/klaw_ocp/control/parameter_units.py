@@ -3,7 +3,7 @@ torque shapes), so that results, comparisons and plots can name them without kno
 
 Stance (control/stance_law.py): the F_theta1 step magnitude, the pa offset of the late extension,
 the closing step's braking level and, in the tracking formulation, the pa profile's knots.
-Swing (control/swing_spec.py): swing1's F_theta3 magnitude, swing2's F_theta4 magnitude and the
+Swing (control/swing_spec.py): swing1's F_theta3 fall and mean, swing2's F_theta4 fall and mean and the
 recovery loop's hip actuator (a shift of the held thigh angle), swing3's constant hip moment.
 """
 from __future__ import annotations
@@ -15,8 +15,10 @@ PARAMETER_UNITS: dict[str, str] = {
     "pa_offset": "m",
     "F_theta1_brake": "N m",
     **{knot: "m" for knot in PA_KNOTS},
-    "F_theta3_magnitude": "N m",
-    "F_theta4_magnitude": "N m",
+    "F_theta3_fall": "N m",
+    "F_theta3_mean": "N m",
+    "F_theta4_fall": "N m",
+    "F_theta4_mean": "N m",
     "hip_actuator": "rad",
     "F_theta3_moment": "N m",
 }

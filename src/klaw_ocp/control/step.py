@@ -35,7 +35,7 @@ from .swing_spec import swing_specs
 #: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
 #: regions and tolerances then act alike on each). F_theta1: 5 % of the body's weight times l1;
 #: the stance's pa knots and offset 2 cm; swing1's F_theta3 amplitude 20 % of the leg's weight
-#: times l1; swing2's knee amplitude 10 % of the shank's weight times l4 and its recovery actuator
+#: times l1 (its fall and mean); swing2's knee fall and mean 10 % of the shank's weight times l4 and its recovery actuator
 #: 0.05 rad; swing3's heel-down moment 5 % of the leg's weight times l1.
 F_THETA1_SCALE_REL = 0.05
 STANCE_OTHER_SCALE = 0.02
@@ -155,8 +155,9 @@ class StepController:
         torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1
         stance_scale = {"F_theta1_magnitude": torque, "F_theta1_brake": torque}
         self.stance_scale = {n: stance_scale.get(n, STANCE_OTHER_SCALE) for n in STANCE_PARAMETERS.names}
-        self.scales = {"swing1": np.array([SWING1_SCALE_REL * body.m1 * body.g * body.l1]),
-                       "swing2": np.array([SWING2_KNEE_SCALE_REL * body.m4 * body.g * body.l4, SWING2_RECOVERY_SCALE]),
+        hip, knee = SWING1_SCALE_REL * body.m1 * body.g * body.l1, SWING2_KNEE_SCALE_REL * body.m4 * body.g * body.l4
+        self.scales = {"swing1": np.array([hip, hip]),          # F_theta3's fall and mean
+                       "swing2": np.array([knee, SWING2_RECOVERY_SCALE, knee]),
                        "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
     # -- contexts ------------------------------------------------------------------------------
@@ -273,18 +274,19 @@ class StepController:
         c1 = lock_context(c, mode1)
         s1 = self._solve(index, SubphaseProblem(
             specs["swing1"], np.concatenate([x_to, [ds.theta3_toe_off, ds.theta4_toe_off, ds.theta3d_toe_off]]),
-            time_grid(t.t_ds, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 1), self.scales["swing1"],
+            time_grid(t.t_ds, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 2), self.scales["swing1"],
             mode=mode1))
         x_end1 = s1.final_state
         mode2 = lock_mode(s1.events, mode=mode1)
         c2 = lock_context(c, mode2)
-        th4d = float(evaluate(specs["swing1"].rhs, x_end1, t1, s1.parameters["F_theta3_magnitude"], c2)[0][7])
-        guess2 = self._guess("swing2", 2)
+        u1 = [s1.parameters[k] for k in specs["swing1"].unknown_names]
+        th4d = float(evaluate(specs["swing1"].rhs, x_end1, t1, u1, c2)[0][7])
+        guess2 = self._guess("swing2", 3)
         guess2[1] = 0.0
         s2 = self._solve(index, SubphaseProblem(
             specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c2,
-            guess2, self.scales["swing2"], fixed=(False, True), path_lower=np.array([a.toe_clearance, -np.inf]),
-            recovery_step=np.array([0.0, SWING2_RECOVERY_STEP]), mode=mode2))
+            guess2, self.scales["swing2"], fixed=(False, True, False), path_lower=np.array([a.toe_clearance, -np.inf]),
+            recovery_step=np.array([0.0, SWING2_RECOVERY_STEP, 0.0]), mode=mode2))
         x_end2 = s2.final_state
         knee = knee_lock_map(self.body, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         mode3 = lock_mode(s2.events, mode=mode2)

@@ -36,6 +36,7 @@ from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
 from .curve_p import curve_p_coefficients, swing1_end_posture
 from .stance_law import STANCE_PARAMETERS
 from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
+from .torques import exponential_mean
 
 #: Curve P spans at least this fraction of the ankle's travel from toe-off to its landing point
 #: (steady steps: about 0.43 from the toe-under-knee rule). See docs/solvers.md, "The first step".
@@ -212,14 +213,15 @@ def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_p
     schedule, the holding gains and the subphase times from it."""
     b, a, t, con = body, attrs, plan.timings, plan.constraints
     t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
+    tau3, tau4 = a.swing1_torque_time_constant * (t1 - t_to), a.swing2_knee_time_constant * (t2 - t1)
     ctx = dict(stance_context)
     ctx.update({f"stance_{k}": stance_parameters.get(k, 0.0) for k in STANCE_PARAMETERS.names})
     ctx.update(origin_x=origin[0], origin_y=origin[1],
                l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
                **{key: getattr(curve.swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)},
                k_h=gains.k_h, d_h=gains.d_h, theta3_target=con.theta3,
-               tau3=a.swing1_torque_time_constant * (t1 - t_to), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
-               swing2_start=t1, tau4=a.swing2_knee_time_constant * (t2 - t1), pelvis_width=pelvis.width,
+               tau3=tau3, exp3_mean=exponential_mean(t1 - t_to, tau3), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
+               swing2_start=t1, tau4=tau4, exp4_mean=exponential_mean(t2 - t1, tau4), pelvis_width=pelvis.width,
                pelvis_rotation_start=pelvis.rotation_start, pelvis_rotation_end=pelvis.rotation_end,
                pelvis_list=pelvis.list_peak,
                **{f"P{i}": curve.coefficients[i] for i in range(5)})

@@ -13,9 +13,13 @@ States (stance part first, see :mod:`.stance_law`):
   locked for the dynamics (eq. 5) while theta4 is driven kinematically by forcing the ankle onto
   curve P; theta4's rate comes from differentiating that constraint, with a Baumgarte term that
   keeps the ankle on the curve (ERRATA "Swing1": the paper accepts this inconsistency).
-  F_theta3 = a decaying exponential (ERRATA 7: F_theta3, not F_theta1).
+  F_theta3 = a decaying exponential about its mean (ERRATA 7: F_theta3, not F_theta1): two
+  unknowns, so that the thigh reaches its heel-strike angle at t1 at rest, at its peak ("the hip
+  angle reaches a maximum", §4.3).
 - swing2: ``[..6.., theta3, theta4, theta3d, theta4d]``. F_theta3 is a spring-damper holding the
-  thigh at its heel-strike angle, shifted by the recovery actuator; F_theta4 a decaying exponential.
+  thigh at its heel-strike angle, shifted by the recovery actuator; F_theta4 a decaying exponential
+  about its mean, two unknowns, so that the knee reaches full extension at t2 at rest and
+  swing3's lock (eq. 5) is not an impact.
 - swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
   holding spring-damper plus a small constant moment that brings the heel down in time.
 
@@ -33,7 +37,7 @@ from ..kinematics.pelvis import swing_hip_offset
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .layout import VectorLayout
 from .stance_law import STANCE_CONTEXT, STANCE_PARAMETERS, body_vector, stance_forces
-from .torques import decaying_exponential, spring_damper
+from .torques import decaying_exponential_about_mean, spring_damper
 
 #: the swing foot's schedule (kinematics/swing_foot.py), under these names in the swing context
 FOOT_CONTEXT = tuple(f"foot_{name}" for name in SCHEDULE_FIELDS)
@@ -44,8 +48,8 @@ SWING_CONTEXT = VectorLayout(
     STANCE_PARAMETERS_IN_SWING,
     ["origin_x", "origin_y", "l8", "l9", "l12", "l13",
      "toe_off_time", "swing_end_time", *FOOT_CONTEXT,
-     "k_h", "d_h", "theta3_target", "tau3", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
-     "swing2_start", "tau4", "pelvis_width", "pelvis_rotation_start", "pelvis_rotation_end",
+     "k_h", "d_h", "theta3_target", "tau3", "exp3_mean", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
+     "swing2_start", "tau4", "exp4_mean", "pelvis_width", "pelvis_rotation_start", "pelvis_rotation_end",
      "pelvis_list"],
 )
 SWING_FORCES = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
@@ -99,7 +103,7 @@ def swing1_rhs(x, t, u, c):
     n = names(c)
     stance_rates, _, hip, hip_vel, hip_acc = stance_part(x[0:6], t, c)
     th3, th4, th3d = x[6], x[7], x[8]
-    f3 = decaying_exponential(t, n.toe_off_time, n.tau3, u[0])
+    f3 = swing1_torque(t, u, c)
     qdd = swing_accelerations_sx(ca.vertcat(th3, th4), ca.vertcat(th3d, 0), ca.vertcat(f3, 0), hip_acc,
                                  body_vector(c), 1)
     th3dd = qdd[0]
@@ -115,10 +119,15 @@ def swing1_rhs(x, t, u, c):
     return ca.vertcat(stance_rates, th3d, th4d, th3dd)
 
 
-def swing1_forces(x, t, u, c):
+def swing1_torque(t, u, c):
+    """F_theta3 of swing1, u = (fall, mean)."""
     n = names(c)
+    return decaying_exponential_about_mean(t, n.toe_off_time, n.tau3, n.exp3_mean, u[0], u[1])
+
+
+def swing1_forces(x, t, u, c):
     _, stance_f, *_ = stance_part(x[0:6], t, c)
-    return ca.vertcat(stance_f, decaying_exponential(t, n.toe_off_time, n.tau3, u[0]), 0)
+    return ca.vertcat(stance_f, swing1_torque(t, u, c), 0)
 
 
 def _hold(th3, th3d, c, actuator=0):
@@ -128,7 +137,8 @@ def _hold(th3, th3d, c, actuator=0):
 
 def swing2_torques(x, t, u, c):
     n = names(c)
-    return _hold(x[6], x[8], c, u[1]), decaying_exponential(t, n.swing2_start, n.tau4, u[0])
+    """F_theta3 (the hold, shifted by the recovery actuator u[1]) and F_theta4, u = (fall, actuator, mean)."""
+    return _hold(x[6], x[8], c, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 
 def swing2_rhs(x, t, u, c):

@@ -1,10 +1,10 @@
 """The three swing subphases as boundary-value problems (section 4.3).
 
-- ``swing1`` (toe-off to 50 % of t_swing): unknown F_theta3 magnitude; theta3 reaches its eq. 3
-  value at t1.
-- ``swing2`` (to 85 %): unknowns F_theta4 magnitude and the hip position actuator of the recovery
-  loop (held at 0 unless the toe would not clear the ground); the knee reaches full extension
-  (theta4 = 0) at t2. Path functions: toe height, kept above the toe-clearance attribute, and
+- ``swing1`` (toe-off to 50 % of t_swing): unknowns F_theta3's fall and mean; theta3 reaches its
+  eq. 3 value at t1 with theta3d = 0 ("the hip angle reaches a maximum", §4.3).
+- ``swing2`` (to 85 %): unknowns F_theta4's fall and mean and the hip position actuator of the
+  recovery loop (held at 0 unless the toe would not clear the ground); the knee reaches full
+  extension (theta4 = 0) at t2 with theta4d = 0, so that swing3's lock is not an impact. Path functions: toe height, kept above the toe-clearance attribute, and
   heel height, reported only (no lower bound: the straight leg of short steps cannot keep the
   scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, body_motion/swing_foot_guard.py).
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
@@ -26,9 +26,13 @@ from .stance_spec import stance_lock_events
 _NC = len(law.SWING_CONTEXT)
 SWING2_PATH = ("toe_height", "heel_height")
 SWING3_PATH = ("heel_height",)
+SWING1_UNKNOWNS = ("F_theta3_fall", "F_theta3_mean")
+#: the recovery actuator stays at index 1 (held fixed unless the toe would touch the ground)
+SWING2_UNKNOWNS = ("F_theta4_fall", "hip_actuator", "F_theta4_mean")
 
 
-def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule=choices.DEFAULT_LOCK_RULE):
+def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule=choices.DEFAULT_LOCK_RULE,
+          pairing=((0, 0),)):
     x, t = ca.SX.sym("x", len(state)), ca.SX.sym("t")
     u, c = ca.SX.sym("u", len(unknowns)), ca.SX.sym("c", _NC)
     args = [x, t, u, c]
@@ -42,7 +46,7 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
         path=ca.Function(f"{name}_path", args, [path(*args)]) if path else None,
         path_names=tuple(path_names),
         events=stance_lock_events(len(state), len(unknowns), _NC, lock_rule),
-        pairing=((0, 0),),
+        pairing=pairing,
         # the stance the swing re-simulates (assumption 4) must stay a walk's stance
         plausible=ca.Function(f"{name}_plausible", [x, c], [stance_plausible(x[:6], c[: len(STANCE_CONTEXT)])]),
     )
@@ -52,11 +56,16 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
 def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
     """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
     theta3_error = lambda x, c: x[6] - law.names(c).theta3_target
+    # the thigh at its target and at rest at t1 (x[8] = theta3d); the knee straight and at rest at
+    # t2 (x[7], x[9]). Plain shooting pairs each mean with the rate, each fall with the position
+    # (control/torques.py: decaying_exponential_about_mean).
     return {
-        "swing1": _spec("swing1", law.SWING1_STATE, ("F_theta3_magnitude",), law.swing1_rhs,
-                        law.swing1_forces, theta3_error, lock_rule=lock_rule),
-        "swing2": _spec("swing2", law.SWING2_STATE, ("F_theta4_magnitude", "hip_actuator"), law.swing2_rhs,
-                        law.swing2_forces, lambda x, c: x[7], law.swing2_clearance, SWING2_PATH, lock_rule),
+        "swing1": _spec("swing1", law.SWING1_STATE, SWING1_UNKNOWNS, law.swing1_rhs, law.swing1_forces,
+                        lambda x, c: ca.vertcat(theta3_error(x, c), x[8]), lock_rule=lock_rule,
+                        pairing=((1, 1), (0, 0))),
+        "swing2": _spec("swing2", law.SWING2_STATE, SWING2_UNKNOWNS, law.swing2_rhs, law.swing2_forces,
+                        lambda x, c: ca.vertcat(x[7], x[9]), law.swing2_clearance, SWING2_PATH, lock_rule,
+                        pairing=((2, 1), (0, 0))),
         "swing3": _spec("swing3", law.SWING3_STATE, ("F_theta3_moment",), law.swing3_rhs,
                         law.swing3_forces, theta3_error, law.swing3_clearance, SWING3_PATH, lock_rule),
     }

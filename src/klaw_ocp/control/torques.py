@@ -9,7 +9,10 @@ plain-shooting solvers.
 - :func:`leg_force`: F_w, the spring-damper with position actuator pa (the lost eq. 4; ERRATA 8).
 - :func:`spring_damper`: F_theta2 balancing the upper body (§4.2) and F_theta3 holding the thigh
   in swing2 (§4.3).
-- :func:`decaying_exponential`: F_theta3 in swing1 and F_theta4 in swing2 (§4.3).
+- :func:`decaying_exponential`: the paper's shape, ``magnitude * exp(-t / tau)``.
+- :func:`decaying_exponential_about_mean`: F_theta3 in swing1 and F_theta4 in swing2 (§4.3), the
+  decaying exponential with an asymptote, so that the subphase can meet a rate condition at its
+  end beside the position (issue #36; docs/paper-map.md).
 - :func:`hip_height_reference` and :func:`position_actuator`: the "monitoring" of pa (§4.2).
 - :func:`piecewise_linear`: the pa profile that the tracking formulation frees over the grid.
 """
@@ -32,6 +35,26 @@ def decaying_exponential(t, t_start, time_constant, magnitude):
     """``magnitude * exp(-(t - t_start) / time_constant)``."""
     exp = ca.exp if isinstance(t, (ca.SX, ca.MX)) else np.exp
     return magnitude * exp(-(t - t_start) / time_constant)
+
+
+def exponential_mean(duration, time_constant):
+    """The mean of ``exp(-s / time_constant)`` over ``0 <= s <= duration``."""
+    exp = ca.exp if isinstance(duration, (ca.SX, ca.MX)) else np.exp
+    return time_constant / duration * (1 - exp(-duration / time_constant))
+
+
+def decaying_exponential_about_mean(t, t_start, time_constant, exp_mean, fall, mean):
+    """``mean + fall * (exp(-(t - t_start) / time_constant) - exp_mean)``: a decaying exponential
+    whose time average over the subphase is ``mean`` and whose fall from start to end is about
+    ``fall`` (``exp_mean`` = :func:`exponential_mean` of the subphase).
+
+    The paper's shape has one free parameter, enough for the one position it imposes at the
+    subphase's end; a limb that must also arrive at rest (the thigh at its peak at t1, the knee
+    extending softly at t2) needs a second. The two are nearly decoupled: the mean sets the
+    angular momentum the subphase ends with, the fall how early it is spent, so the plain
+    shooting's one-unknown-at-a-time sweeps contract (pairing mean with the rate, fall with the
+    position)."""
+    return mean + fall * (decaying_exponential(t, t_start, time_constant, 1.0) - exp_mean)
 
 
 def spring_damper(q, qd, stiffness, damping, q_rest, actuator=0.0):

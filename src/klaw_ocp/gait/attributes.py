@@ -125,16 +125,18 @@ _SPECS = [
           "§4.3 curve P: a_max 'chosen somewhat arbitrarily'; a_max at 0 km/h, " + _OURS),
     _spec("swing", "ankle_peak_height_speed_slope", "l1/(km/h)", 0.01, 0.0, 0.05,
           "§4.3 curve P: 'the faster the walk, the smaller a_max'; slope " + _OURS),
-    _spec("swing", "swing1_torque_time_constant", "1", 0.3, 0.02, 5.0,
+    _spec("swing", "swing1_torque_time_constant", "1", 1.0, 0.02, 10.0,
           "§4.3: swing1 hip torque is 'a decaying exponential function'; time constant as a "
-          "fraction of the swing1 duration, " + _OURS),
-    _spec("swing", "swing2_knee_time_constant", "1", 0.3, 0.02, 5.0,
+          "fraction of the swing1 duration (with the thigh at rest at t1, a slow decay spreads "
+          "the push: the smallest peak hip torque), " + _OURS),
+    _spec("swing", "swing2_knee_time_constant", "1", 4.0, 0.02, 10.0,
           "§4.3: swing2 knee torque 'is a decaying exponential function'; time constant as a "
-          "fraction of the swing2 duration, " + _OURS),
-    _spec("swing", "hip_hold_frequency", "Hz", 2.0, 0.1, 20.0,
+          "fraction of the swing2 duration (with the knee at rest at t2, a slow decay lets it "
+          "extend softly), " + _OURS),
+    _spec("swing", "hip_hold_frequency", "Hz", 1.5, 0.1, 20.0,
           "§4.3 swing2: hip torque 'a spring and damping model to hold the thigh in place'; "
           "natural frequency " + _OURS),
-    _spec("swing", "hip_hold_damping_ratio", "1", 0.7, 0.0, 5.0,
+    _spec("swing", "hip_hold_damping_ratio", "1", 1.0, 0.0, 5.0,
           "§4.3 swing2 hip spring-damper; damping ratio " + _OURS),
     # -- stance (section 4.2, eq. 4)
     _spec("stance", "leg_frequency", "Hz", 3.0, 0.1, 20.0,

@@ -340,6 +340,6 @@ def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True,
     ``t_cycle`` (s), its heel up where that needs it."""
     foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0, t_ds), t_heel_off=0.0)
     if from_rest:
-        return replace(foot, t_knee=0.0, knee_lead=math.inf, knee_floor=0.0, heel_blend=0.0)
+        return replace(foot, t_knee=0.0, knee_lead=math.inf, knee_floor=0.0, knee_toe_off=0.0, heel_blend=0.0)
     lead = attrs.knee_flexion_lead * t_cycle
     return replace(foot, t_flat=-t_cycle, t_knee=t_ds - lead, knee_lead=lead, heel_blend=HEEL_BLEND_REL * body.l1)

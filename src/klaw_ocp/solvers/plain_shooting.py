@@ -27,6 +27,12 @@ from .integrator import prepare_kernels, subphase_kernels
 from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
 
 
+#: Gauss-Seidel sweeps that shrink the residual by less than this factor twice in a row are left
+#: for Broyden's method: two coupled unknowns (swing1's and swing2's fall and mean) contract by
+#: 0.6-0.9 a sweep, and thirty slow sweeps cost more shots than Broyden's whole solve.
+SLOW_SWEEPS = 0.5
+
+
 class PlainShootingSolver:
     """Forward shooting; see the module docstring. ``max_iterations`` bounds the shots per 1-D solve."""
 
@@ -45,6 +51,10 @@ class PlainShootingSolver:
         self._fallbacks: list = []
         #: False while the event-free start solves the smooth problem (see :meth:`_solve_free`)
         self._events_armed = True
+        #: spec -> the Jacobian Broyden's method ended with on that subphase's last solve: the next
+        #: step's same subphase, a problem close to it, starts Broyden from it rather than from
+        #: finite differences and sweeps that did not contract (a walk's own solver: per walk)
+        self._coupled: dict = {}
 
     def prepare(self, specs) -> None:
         """Compile or load the kernels of ``specs`` now, in parallel (the first run on a machine)."""
@@ -148,10 +158,19 @@ class PlainShootingSolver:
         every stage starts close to its root, which is where bisection and secant are reliable.
         """
         start = u.copy()
+        several = sum(not f for f in pb.fixed) > 1
+        if several and pb.spec in self._coupled:
+            self._note("broyden")
+            u0, residual0, shots0 = self._broyden(pb, start.copy(), self._coupled[pb.spec])
+            if np.all(np.isfinite(residual0)) and np.max(np.abs(residual0)) <= self.tolerance:
+                return u0, residual0, shots0
+        else:
+            shots0 = 0
         u1, residual, shots = self._sweeps(pb, u.copy(), None)
+        shots += shots0
         if np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance:
             return u1, residual, shots
-        if sum(not f for f in pb.fixed) > 1:
+        if several:
             self._note("broyden")
             u2, residual2, n = self._broyden(pb, start.copy())
             shots += n
@@ -216,6 +235,9 @@ class PlainShootingSolver:
             history.append(worst)
             if len(history) > 3 and history[-1] > 0.95 * history[-4]:
                 break   # not contracting: leave it to the homotopy (or report the failure)
+            if (len(pairs) > 1 and len(history) > 2 and history[-1] > SLOW_SWEEPS * history[-2]
+                    and history[-2] > SLOW_SWEEPS * history[-3]):
+                break   # contracting slowly: Broyden's method is cheaper (SLOW_SWEEPS)
             # inexact sweeps: each 1-D solve only needs to beat the current coupling error
             tol = max(self.tolerance, 0.01 * worst) if len(pairs) > 1 else self.tolerance
             for i, j in pairs:
@@ -232,9 +254,10 @@ class PlainShootingSolver:
             shots += 1
         return u, residual + shift, shots
 
-    def _broyden(self, pb, u):
+    def _broyden(self, pb, u, jac=None):
         """The secant method in several unknowns (Broyden's update of a finite-difference
-        Jacobian, backtracking on |residual|): when the one-at-a-time sweeps do not contract."""
+        Jacobian, or of ``jac``, backtracking on |residual|): when the one-at-a-time sweeps do not
+        contract. The Jacobian it ends with is kept for the spec's next solve (``_coupled``)."""
         free = [i for i, f in enumerate(pb.fixed) if not f]
         rows = [j for i, j in pb.spec.pairing if not pb.fixed[i]]
         final = lambda trial: self._final(pb, trial)[0]
@@ -245,8 +268,11 @@ class PlainShootingSolver:
         def jacobian(u, res):
             return fd_jacobian(lambda trial: final(trial)[rows], u, res, free, pb.scale)
 
-        jac, fresh = jacobian(u, res), True
-        shots += len(free)
+        if jac is None:
+            jac, fresh = jacobian(u, res), True
+            shots += len(free)
+        else:
+            jac, fresh = jac.copy(), False     # a stale start: refreshed once if it stops helping
         for _ in range(self.max_iterations):
             if np.max(np.abs(res)) <= self.tolerance:
                 break
@@ -273,6 +299,8 @@ class PlainShootingSolver:
             ds, dr = damping * step, new - res
             jac += np.outer(dr - jac @ ds, ds) / (ds @ ds)
             u, res, fresh = trial, new, False
+        if np.max(np.abs(res)) <= self.tolerance:
+            self._coupled[pb.spec] = jac
         return u, final(u), shots + 1
 
     def _choose_pairing(self, pb, u, residual, pairs, final):

@@ -1,0 +1,106 @@
+"""The swing of issue #36: the thigh at its peak at t1, the knee extending softly to rest at t2.
+
+Swing1's F_theta3 and swing2's F_theta4 are decaying exponentials about their mean
+(control/torques.py), two unknowns each, so that each subphase ends with its limb at rest: the
+thigh at its heel-strike angle with theta3d = 0 at t1 ("the hip angle reaches a maximum", §4.3),
+the knee straight with theta4d = 0 at t2, so that swing3's lock (eq. 5) is not an impact.
+"""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from klaw_ocp import choices
+from klaw_ocp.body import Body
+from klaw_ocp.control.swing_spec import swing_specs
+from klaw_ocp.control.torques import decaying_exponential_about_mean, exponential_mean
+from klaw_ocp.dynamics import knee_lock_map
+from klaw_ocp.walk import simulate_walk
+
+METHODS = (choices.MULTIPLE_SHOOTING, choices.PLAIN_SHOOTING)
+#: the solvers meet final conditions to the config's tolerance, 1e-9; the rates are checked to
+#: what an angular rate's final condition reaches with it (rad/s)
+RATE_TOL = 1e-6
+
+
+@pytest.mark.parametrize("duration, tau", [(0.2, 0.2), (0.15, 0.6), (0.3, 0.01), (0.1, 3.0)])
+def test_the_shape_averages_its_mean_and_falls_by_its_fall(duration, tau):
+    fall, mean = -40.0, 12.0
+    shape = lambda t: decaying_exponential_about_mean(t, 0.5, tau, exponential_mean(duration, tau), fall, mean)
+    average = quad(shape, 0.5, 0.5 + duration)[0] / duration
+    assert average == pytest.approx(mean, rel=1e-9)
+    assert shape(0.5) - shape(0.5 + duration) == pytest.approx(fall * (1 - math.exp(-duration / tau)))
+
+
+def test_each_swing_subphase_has_as_many_unknowns_as_final_conditions():
+    specs = swing_specs()
+    for name, nf in (("swing1", 2), ("swing2", 2), ("swing3", 1)):
+        spec = specs[name]
+        assert spec.final.size1_out(0) == nf, name
+        # plain shooting pairs every free unknown with its own condition (swing2's recovery
+        # actuator is fixed unless the toe needs it)
+        free = [i for i, n in enumerate(spec.unknown_names) if n != "hip_actuator"]
+        assert sorted(i for i, _ in spec.pairing) == free and sorted(j for _, j in spec.pairing) == list(range(nf))
+
+
+@pytest.fixture(scope="module", params=[(m, rest) for m in METHODS for rest in (False, True)],
+                ids=[f"{m}-{'from-rest' if rest else 'walking'}" for m in METHODS for rest in (False, True)])
+def walk(request):
+    method, rest = request.param
+    w = simulate_walk({"name": "swing", "body": {"height": 1.8, "mass": 80},
+                       "walk": {"speed": 5.0, "steps": 4, "start_from_rest": rest, "end_at_rest": rest},
+                       "solver": {"method": method}})
+    assert w.status == "ok", w.message
+    return w
+
+
+def test_the_thigh_is_at_its_peak_at_t1(walk):
+    for step in walk.steps:
+        s1 = step.subphase("swing1")
+        theta3, theta3d = s1.states[-1][6], s1.states[-1][8]
+        assert theta3 == pytest.approx(step.plan.constraints.theta3, abs=1e-8), step.index
+        assert abs(theta3d) <= RATE_TOL, step.index
+        # ... its peak: the thigh swung forward to it (theta3 < 0 ahead of the hip) from behind
+        assert s1.states[0][6] > s1.states[-2][6] > theta3, step.index
+
+
+def test_the_thigh_holds_in_swing2(walk):
+    """§4.3: in swing2 the hip angle "stays fairly constant". It no longer swings past its target
+    (by 0.10 rad when only theta3(t1) was imposed); the knee's extension pulls it back by up to
+    7° at 5 km/h against the holding spring (1.5 Hz, critically damped), which swing3 returns by
+    heel strike."""
+    for step in walk.steps:
+        s2 = step.subphase("swing2")
+        theta3 = s2.states[:, 6]
+        # the recovery loop (§4.3) moves the held angle forward where the toe would touch the
+        # ground (a closing step's short swing)
+        target = step.plan.constraints.theta3 + s2.parameters["hip_actuator"]
+        assert theta3.min() >= target - 1e-6, step.index               # never past it forward
+        assert theta3.max() - target <= math.radians(8), step.index
+
+
+def test_the_knee_arrives_straight_at_rest_and_locks_without_an_impact(walk):
+    body = walk.spec.body
+    for step in walk.steps:
+        s2 = step.subphase("swing2")
+        x = s2.states[-1]
+        assert abs(x[7]) <= 1e-8 and abs(x[9]) <= RATE_TOL, step.index
+        # never hyperextended on the way
+        assert s2.states[:, 7].min() >= -1e-6, step.index
+        # eq. 5's lock changes the thigh's rate by nothing a frame could show (it changed it by
+        # about 1 rad/s when the knee arrived at 5-7 rad/s)
+        locked = knee_lock_map(body, x[6:10], np.zeros(2))
+        assert abs(locked[2] - x[8]) <= 1e-5, step.index
+        # and swing3 starts from that state
+        assert step.subphase("swing3").states[0][7] == pytest.approx(locked[2], abs=1e-12)
+
+
+def test_the_knee_extends_softly(walk):
+    """No slam: the knee's extension rate falls to zero over swing2's last fifth (people's knee
+    peaks near 400°/s in mid-swing and reaches full extension gently)."""
+    for step in walk.steps:
+        s2 = step.subphase("swing2")
+        last = s2.t >= s2.t[0] + 0.8 * (s2.t[-1] - s2.t[0])
+        rates = np.abs(s2.states[last, 9])
+        assert rates[-1] <= RATE_TOL and rates.max() <= math.radians(400), step.index
