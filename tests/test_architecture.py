@@ -33,6 +33,9 @@ ALLOWED = {
                      "result_files", "figures", "compare", "choices", "sweep_pool", "stop_signals"},
     "reproduce": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
                          "result_files", "figures", "compare", "choices"},
+    "stepwise": BASE | {"walk", "body_motion", "config", "control", "gait", "results", "solvers"},
+    # the web playground: it drives a stepwise walk; nothing below it knows of the web
+    "serve": BASE | {"stepwise", "config", "gait", "body_motion", "result_files", "choices"},
 }
 EVERYTHING = set(ALLOWED) | {"package", "commands", "cli"}
 ALLOWED.update({"commands": EVERYTHING, "cli": EVERYTHING, "package": EVERYTHING, "__main__": EVERYTHING})

@@ -122,6 +122,47 @@ def _excursion(body: Body, attrs, y_start: float, y_end: float) -> float:
     return max(midstance - max(y_start, y_end), attrs.min_hip_excursion_rel * body.l1)
 
 
+class StepLoop:
+    """The state machine one step at a time, shared by :func:`simulate_walk` and
+    :class:`klaw_ocp.stepwise.StepwiseWalk`, so that both give the same numbers for the same plans.
+
+    ``plan_of(k)`` gives step k's plan and whether it is the closing step that ends at rest, or
+    None when the walk has no step k. It is asked for step k + 1 before step k is solved (principle
+    1: the high level before the step): this stance leg's toe-off ends the next step's double
+    support, so its knee schedule needs that step's t_ds, and the heel-strike map its plan. A
+    caller that decides the plans as the walk goes (the live playground) decides each one a step
+    ahead."""
+
+    def __init__(self, spec: WalkSpec, controller: StepController, plan_of):
+        self.spec, self.controller, self.plan_of = spec, controller, plan_of
+        self.k = 0
+        self.current = plan_of(0)
+        first = self.current[0]
+        inp = _first_input(controller, spec)
+        self.initial_state = inp.x0
+        # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
+        # the next step's hind leg, whose toe-off starts that step's swing1
+        inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
+                                          first.timings.t_cycle, first.timings.t_ds)
+        self.inp = inp
+
+    def solve_next(self) -> StepResult | None:
+        """Solve the next step and return it; None once the walk has no step left."""
+        if self.current is None:
+            return None
+        (plan, at_rest), k = self.current, self.k
+        following = self.plan_of(k + 1)
+        next_plan = following[0] if following is not None else None
+        # this stance leg's toe-off ends the next step's double support: its knee schedule
+        # runs to that toe-off (this step's own where there is no next step)
+        self.inp.next_t_ds = next_plan.timings.t_ds if next_plan is not None else None
+        result: StepResult = self.controller.solve_step(plan, self.inp, k, at_rest=at_rest)
+        # the step's stance leg is the next step's hind leg, whose double support completes it
+        self.inp = _next_input(self.spec, plan, result, next_plan)
+        self.current, self.k = following, k + 1
+        return result
+
+
 def simulate_walk(spec, method: str | None = None, progress: bool = False, raise_on_failure: bool = True,
                   on_step=None) -> Walk:
     """Run the walk step by step. ``spec`` is a :class:`WalkSpec`, an experiment configuration,
@@ -191,25 +232,17 @@ def _simulate(spec: WalkSpec, progress: bool, raise_on_failure: bool, on_step) -
                 # with tqdm.write (the compile notice) clears and redraws it
                 from tqdm import tqdm
                 bar = tqdm(total=len(plans), desc=f"{spec.name} ({spec.method})", unit="step")
-            inp = _first_input(controller, spec)
-            walk.initial_state = inp.x0.copy()
-            # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
-            # the next step's hind leg, whose toe-off starts that step's swing1
-            inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
-                                              plans[0].timings.t_cycle, plans[0].timings.t_ds)
-            for k in range(len(plans)):
+            plan_of = lambda k: (plans[k], k == len(spec.plans)) if k < len(plans) else None  # noqa: E731
+            loop = StepLoop(spec, controller, plan_of)
+            walk.initial_state = loop.initial_state.copy()
+            while True:
                 interrupts.check()          # Ctrl-C stops the walk between steps (klaw_ocp.console)
-                plan = plans[k]
-                # this stance leg's toe-off ends the next step's double support: its knee schedule
-                # runs to that toe-off (this step's own where there is no next step)
-                inp.next_t_ds = plans[k + 1].timings.t_ds if k + 1 < len(plans) else None
-                result: StepResult = controller.solve_step(plan, inp, k, at_rest=k == len(spec.plans))
-                # the step's stance leg is the next step's hind leg, whose double support completes it
-                next_inp = _next_input(spec, plan, result, plans[k + 1] if k + 1 < len(plans) else None)
-                # the step is complete: only now does the walk hold it (an interrupt above leaves
-                # the walk as it was after the previous step)
+                result = loop.solve_next()
+                if result is None:
+                    break
+                # the step is complete: only now does the walk hold it (an interrupt inside the
+                # solve leaves the walk as it was after the previous step)
                 walk.steps.append(result)
-                inp = next_inp
                 if bar is not None:
                     bar.update(1)
                 if on_step is not None:

@@ -251,8 +251,15 @@ def body_motion(walk, fps: float) -> BodyMotion:
     step (:class:`~klaw_ocp.walk.Walk`)."""
     if not walk.steps:
         raise ValueError("walk: no completed step, so no body motion")
+    return body_motion_at(walk, Samples.of(walk, fps))
+
+
+def body_motion_at(walk, samples: Samples) -> BodyMotion:
+    """The body at the frames ``samples`` (walk times within the walk's steps). Every frame reads
+    only its own step and its neighbours (the stance leg's toe-off in the next step's double
+    support, the hind leg's stance in the previous one), so a walk of a few steps around a step
+    gives that step's frames as the whole walk does (:func:`step_frames`)."""
     body, attrs = walk.spec.body, walk.spec.attributes
-    samples = Samples.of(walk, fps)
     pelvis_at = lambda t: pelvis_angles_at(walk, t)
     pelvis_angles = pelvis_at(samples.t)
     pieces = WalkPieces.of(walk)

@@ -232,15 +232,10 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         if i >= MAX_STEPS:
             raise ConfigError(f"walk.duration: got {duration:g} s, which takes more than {MAX_STEPS} "
                               f"steps, allowed at most {MAX_STEPS} steps (docs/limits.md)")
-        p = _parameters_at(i, base, entries, body, attrs)
-        if start_from_rest:
-            p = _start_ramp(i, p, body, attrs)
-        timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
-        check_step_length(body, p, i)
-        constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=x, hip_shift=landing_hip_shift(body, attrs))
-        plans.append(StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t))
-        t += timings.t_step
-        x = constraints.next_ankle_x
+        plan = plan_step(body, attrs, i, _parameters_at(i, base, entries, body, attrs), t, x, start_from_rest)
+        plans.append(plan)
+        t += plan.timings.t_step
+        x = plan.constraints.next_ankle_x
         if n_steps is not None and t > MAX_WALK_S + 1e-9:
             raise ConfigError(f"walk.steps: got {n_steps} steps, which last more than {MAX_WALK_S:g} s "
                               f"({i + 1} steps take {t:.4g} s), allowed at most {MAX_WALK_S:g} s of "
@@ -253,6 +248,21 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
                                        f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
     check_step_changes(body, [p.parameters for p in plans], attrs)
     return plans
+
+
+def plan_step(body: Body, attrs, i: int, p: LocomotionParameters, t_start: float, ankle_x: float,
+              start_from_rest: bool = False) -> StepPlan:
+    """Step ``i`` with the parameters ``p`` (eq. 1 completed) starting at walk time ``t_start``
+    with its stance ankle at ``ankle_x``: the start ramp of a walk from rest, the timings (eq. 2),
+    the envelope's step check and the constraints (eq. 3). :func:`plan_steps` plans every step
+    with it, and so does a walk planned step by step (:mod:`klaw_ocp.stepwise`)."""
+    if start_from_rest:
+        p = _start_ramp(i, p, body, attrs)
+    timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
+    check_step_length(body, p, i)
+    constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=ankle_x,
+                                   hip_shift=landing_hip_shift(body, attrs))
+    return StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t_start)
 
 
 def landing_hip_shift(body: Body, attrs) -> float:

@@ -1,0 +1,151 @@
+"""The playground's messages (docs/serve.md, "Messages"): what a page may send, checked into one-line
+refusals, and what the server sends back, in JSON.
+
+From the page:
+
+- ``{"type": "start", "settings": {PATH: value, ...}}``: a new walk; PATH is one of
+  :data:`SETTINGS` (the config's own paths, as ``klaw-ocp run --set`` takes them) or
+  ``attributes.NAME``; a bad value is refused with the config's one line and the walk on screen
+  goes on;
+- ``{"type": "set", "values": {"speed": 4.2, "step_length": 0.7}}``: new locomotion parameters
+  from the next step that can change (a subset of speed km/h, step_length m, step_frequency
+  steps/min, completed with eq. 1);
+- ``{"type": "stop"}``: end the walk at rest; ``{"type": "shown", "step": k}``: the page began to
+  show step k (the walk runs one step ahead of it); ``{"type": "export"}``: the ended walk as
+  walk.bvh and as the config that ``klaw-ocp run`` solves into it.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from ..body_motion.skeleton import END_SITES, JOINTS, forward_kinematics
+from ..errors import ConfigError, short_repr
+from ..gait.plan import PARAMETER_KEYS, stance_leg
+
+#: The settings a walk may be started with, besides ``attributes.NAME`` for any attribute.
+SETTINGS = ("body.height", "body.mass", "solver.method", "walk.start_from_rest",
+            "walk.speed", "walk.step_length", "walk.step_frequency")
+TYPES = ("start", "set", "stop", "shown", "export")
+#: The dynamics columns a step carries to the page's strips.
+STRIP_COLUMNS = ("t", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "F_theta3", "F_theta4")
+
+
+class Refused(ConfigError):
+    """A message refused, with the field it names (the page shows the line beside that field)."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(message)
+        self.field = field
+
+
+def refusal(field: str, value, allowed: str) -> Refused:
+    return Refused(field, f"{field}: got {short_repr(value)}, allowed {allowed}")
+
+
+def parse(text, max_bytes: int) -> dict:
+    """A page's message as a checked dict, or :class:`Refused` naming what is wrong."""
+    if isinstance(text, bytes):
+        raise refusal("message", "binary data", "a JSON text message")
+    if len(text.encode("utf-8", "surrogatepass")) > max_bytes:
+        raise Refused("message", f"message: got {len(text.encode('utf-8', 'surrogatepass'))} bytes, "
+                                 f"allowed at most {max_bytes}")
+    try:
+        message = json.loads(text)
+    except (ValueError, RecursionError):
+        raise refusal("message", text[:40], "a JSON object with a type") from None
+    if not isinstance(message, dict) or message.get("type") not in TYPES:
+        kind = message.get("type") if isinstance(message, dict) else message
+        raise refusal("type", kind, f"one of {', '.join(TYPES)}")
+    kind = message["type"]
+    if kind == "start":
+        return {"type": kind, "settings": _settings(message.get("settings", {}))}
+    if kind == "set":
+        values = message.get("values")
+        if not isinstance(values, dict) or not values or set(values) - set(PARAMETER_KEYS):
+            raise refusal("values", values, f"a mapping of some of {', '.join(PARAMETER_KEYS)} to numbers")
+        for key, value in values.items():
+            _number(f"walk.{key}", value)
+        return {"type": kind, "values": values}
+    if kind == "shown":
+        step = message.get("step")
+        if isinstance(step, bool) or not isinstance(step, int) or step < 0:
+            raise refusal("step", step, "an integer >= 0")
+        return {"type": kind, "step": step}
+    return {"type": kind}
+
+
+def _number(field: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise refusal(field, value, "a finite number")
+    return float(value)
+
+
+def _settings(settings) -> dict:
+    if not isinstance(settings, dict):
+        raise refusal("settings", settings, "a mapping of setting paths to values")
+    for path, value in settings.items():
+        if path not in SETTINGS and not (isinstance(path, str) and path.startswith("attributes.")):
+            raise refusal("settings", path, f"one of {', '.join(SETTINGS)} or attributes.NAME")
+        if path == "walk.start_from_rest":
+            if not isinstance(value, bool):
+                raise refusal(path, value, "true or false")
+        elif path == "solver.method":
+            if not isinstance(value, str):
+                raise refusal(path, value, "a solver mode's name")
+        else:
+            _number(path, value)
+    return settings
+
+
+def apply_settings(base: dict, settings: dict) -> dict:
+    """The config mapping of a new walk: ``base`` (the served config's mapping) with ``settings``.
+    A walk speed, step length or frequency given replaces all three of the base (eq. 1 completes
+    the ones not given)."""
+    data = json.loads(json.dumps(base))
+    if any(p in settings for p in ("walk.speed", "walk.step_length", "walk.step_frequency")):
+        for key in PARAMETER_KEYS:
+            data["walk"].pop(key, None)
+    for path, value in settings.items():
+        section, name = path.split(".", 1)
+        data.setdefault(section, {})[name] = value
+    return data
+
+
+def _finite(values, digits: int) -> list:
+    """A float array as a JSON list: rounded, NaN (a leg not driven then) as null."""
+    a = np.round(np.asarray(values, float), digits)
+    return [None if not math.isfinite(v) else v for v in a.tolist()]
+
+
+def skeleton_message(body) -> dict:
+    """The bones the page draws: each joint's parent, and the end sites (toes, head top, hands)."""
+    names = [j.name for j in JOINTS]
+    return {"type": "skeleton", "joints": names,
+            "parents": [-1 if j.parent is None else names.index(j.parent) for j in JOINTS],
+            "end_sites": [names.index(name) for name in END_SITES], "height": body.height}
+
+
+def step_message(ready, body, attrs, planned) -> dict:
+    """A step for the page: its parameters and timings, each frame's joint positions (m, three
+    decimals: a millimetre), its rows of dynamics.csv for the strips, its subphases."""
+    result, frames, table = ready.result, ready.frames, ready.dynamics
+    plan = result.plan
+    skeleton = forward_kinematics(body, frames.root, frames.angles)
+    points = np.concatenate([skeleton.positions] + [skeleton.end_sites[n][:, None] for n in END_SITES], axis=1)
+    subphases = [[s.name, result.t_start + float(s.t[0]), result.t_start + float(s.t[-1])] for s in result.subphases]
+    half = attrs.foot_lateral_distance / 2
+    side = stance_leg(ready.index)
+    return {
+        "type": "step", "index": ready.index, "closing": ready.closing, "stance_leg": side,
+        "t_start": plan.t_start, "t_step": plan.timings.t_step, "t_ds": plan.timings.t_ds,
+        "speed": plan.parameters.speed_kmh, "step_length": plan.parameters.step_length_m,
+        "step_frequency": plan.parameters.step_frequency_spm,
+        "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
+        "frames": {"t": _finite(frames.t, 6), "points": np.round(points, 3).reshape(len(frames.t), -1).tolist()},
+        "dynamics": {**{c: _finite(table[c], 4) for c in STRIP_COLUMNS},
+                     "subphase": [str(s) for s in table["subphase"]]},
+        "subphases": subphases, "solve_ms": round(ready.solve_s * 1000, 2), "planned": planned,
+    }

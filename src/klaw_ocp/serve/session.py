@@ -1,0 +1,139 @@
+"""One page's walk (docs/serve.md): a :class:`~klaw_ocp.stepwise.StepwiseWalk` driven over a
+websocket, one step ahead of what the page shows.
+
+Two tasks per connection: one reads the page's messages (each checked, refused in one line, never
+a crash), one hands out steps. A step is solved in a worker thread only when the page has begun to
+show the step before the one it will get (``ServeLimits.steps_ahead``), so the steps waiting for a
+slow page are bounded, and a page that stops reading stops its walk, never another's. A closed
+page cancels both tasks; the step being solved, if any, finishes in its thread (a few
+milliseconds) and is dropped with the walk.
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+
+from ..config import ExperimentConfig
+from ..errors import ConfigError, ConvergenceError
+from ..result_files.bvh import bvh_text
+from ..body_motion import body_motion
+from ..stepwise import StepwiseWalk
+from .limits import MessageRate, ServeLimits
+from .protocol import Refused, apply_settings, parse, skeleton_message, step_message
+
+
+class LiveSession:
+    """The walk of one websocket connection."""
+
+    def __init__(self, websocket, base: dict, limits: ServeLimits):
+        self.ws, self.base, self.limits = websocket, base, limits
+        self.rate = MessageRate(limits.max_messages_per_s, limits.burst)
+        self.live: StepwiseWalk | None = None
+        self.shown = -1              # the step the page shows (it says so)
+        self.sent = -1               # the last step sent
+        self.wake = asyncio.Event()  # something changed: the sender looks again
+        self.send_lock = asyncio.Lock()
+
+    async def send(self, message: dict) -> None:
+        async with self.send_lock:
+            await self.ws.send_text(json.dumps(message, allow_nan=False))
+
+    async def run(self) -> None:
+        """Serve the connection until the page closes it."""
+        sender = asyncio.create_task(self._hand_out())
+        try:
+            await self._start({})
+            await self._read()
+        finally:
+            sender.cancel()
+            self.live = None
+
+    # -- reading the page ---------------------------------------------------------------------
+    async def _read(self) -> None:
+        while True:
+            event = await self.ws.receive()
+            if event["type"] == "websocket.disconnect":
+                return
+            text = event.get("text") if event.get("text") is not None else event.get("bytes")
+            if not self.rate.allow():
+                await self._refuse(Refused("message", f"message: got more than {self.limits.max_messages_per_s:g} "
+                                                      f"messages a second, allowed at most that; this one was dropped"))
+                continue
+            try:
+                await self._handle(parse(text, self.limits.max_message_bytes))
+            except Refused as err:
+                await self._refuse(err)
+            except ConfigError as err:        # a value outside the envelope or the config's ranges
+                await self._refuse(Refused(str(err).split(":", 1)[0], str(err)))
+            except Exception as err:          # noqa: BLE001 - one page's bad message never ends the server
+                await self._refuse(Refused("message", f"message: could not be handled "
+                                                      f"({type(err).__name__}: {err}); the walk goes on"))
+
+    async def _refuse(self, err: Refused) -> None:
+        await self.send({"type": "refused", "field": err.field, "message": " ".join(str(err).split())})
+
+    async def _handle(self, message: dict) -> None:
+        kind = message["type"]
+        if kind == "start":
+            await self._start(message["settings"])
+        elif kind == "set":
+            if self.live is None or self.live.ended:
+                raise Refused("walk", "walk: got a change with no walk going on, allowed once a walk is started")
+            target = self.live.request(**message["values"])
+            await self.send({"type": "accepted", "target": target})
+        elif kind == "stop":
+            if self.live is not None:
+                self.live.stop()
+                await self.send({"type": "stopping"})
+        elif kind == "shown":
+            self.shown = max(self.shown, min(message["step"], self.sent))
+            self.wake.set()
+        elif kind == "export":
+            await self._export()
+
+    async def _start(self, settings: dict) -> None:
+        """A new walk with ``settings``; refused (the old walk going on) if they are not a walk."""
+        config = ExperimentConfig.from_mapping(apply_settings(self.base, settings))
+        live = await asyncio.to_thread(StepwiseWalk, config)
+        self.live, self.shown, self.sent = live, -1, -1
+        await self.send({**skeleton_message(live.body), "fps": live.spec.fps, "method": live.spec.method,
+                         "start_from_rest": live.spec.start_from_rest})
+        self.wake.set()
+
+    async def _export(self) -> None:
+        live = self.live
+        if live is None or not live.ended or self.sent < len(live.walk.steps) - 1:
+            raise Refused("export", "export: got a walk still walking, allowed once the walk has stopped at rest "
+                                    "(press stop first)")
+        config = live.reproducing_config()
+        fps = live.spec.fps
+        bvh = await asyncio.to_thread(lambda: bvh_text(body_motion(live.walk, fps), live.body, fps))
+        header = ("The walk of a klaw-ocp serve session: `klaw-ocp run` of this file solves the same steps\n"
+                  "and writes the same walk.bvh, byte for byte (docs/serve.md).")
+        await self.send({"type": "export", "bvh": bvh, "config": config.resolved_yaml(header),
+                         "name": config.name})
+
+    # -- handing out steps --------------------------------------------------------------------
+    async def _hand_out(self) -> None:
+        while True:
+            await self.wake.wait()
+            self.wake.clear()
+            live = self.live
+            while live is not None and live is self.live and self.sent - self.shown <= self.limits.steps_ahead:
+                try:
+                    ready = await asyncio.to_thread(live.next_step)
+                except ConvergenceError as err:
+                    live.ended = True
+                    await self.send({"type": "failed", "message": " ".join(str(err).split())})
+                    break
+                if live is not self.live:        # a new walk started meanwhile: drop the old one's step
+                    break
+                if ready is None:
+                    await self.send({"type": "ended", "steps": len(live.walk.steps)})
+                    break
+                self.sent = ready.index
+                planned = live._plans[-1]
+                await self.send(step_message(ready, live.body, live.attributes,
+                                             {"step": planned.index,
+                                              "step_frequency": planned.parameters.step_frequency_spm,
+                                              "speed": planned.parameters.speed_kmh}))

@@ -1,0 +1,243 @@
+"""A walk solved one step at a time, its locomotion parameters changed between steps (section 2.4
+principle 1, section 5: "KLAW is able to adapt to changes in the locomotion parameters from step
+to step"; docs/serve.md).
+
+:class:`StepwiseWalk` runs the same state machine as :func:`klaw_ocp.walk.simulate_walk`
+(:class:`klaw_ocp.walk.StepLoop`), but decides each step's plan as the walk goes: before a step is
+solved, the plan of the step after it is made from the parameters asked for by then. A change
+larger than the envelope's per-step limits (``max_speed_change_per_step``,
+``max_step_length_change_rel``) is spread over as many steps as it needs, as a schedule's ramp is.
+
+Every step's plan comes from (speed, step length) through eq. 1 (:func:`klaw_ocp.gait.plan.plan_step`),
+so the walk is a schedule with an entry at every step from its first change to its last:
+:meth:`StepwiseWalk.config` writes that schedule, and ``klaw-ocp run`` of it solves the same
+steps, to the bit.
+
+Each step's body frames (the root and the 56 angles at the walk's fps) are computed when the step
+after it is solved, on a window of those few steps (:func:`step_frames`): a step's stance leg is
+completed by the next step's double support, so a step's frames are final one step later.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .body_motion.motion import BodyMotion, Samples, body_motion_at
+from .config import ExperimentConfig, check_stance_method, check_walk_size
+from .config import MAX_FRAMES
+from .control.gains import control_gains
+from .control.step import StepController, StepResult
+from .errors import ConfigError, GaitLimitError, out_of_range
+from .gait import closing_step
+from .gait.envelope import check_step_changes, check_step_length
+from .gait.parameters import complete_parameters
+from .gait.plan import MAX_STEPS, MAX_WALK_S, PARAMETER_KEYS, plan_step
+from .results import step_table
+from .solvers import make_solver
+from .solvers.thread_safety import solving
+from .walk import StepLoop, Walk, walk_spec
+
+
+@dataclass(frozen=True)
+class ReadyStep:
+    """A solved step with its body: ``result`` (the step's solution), ``dynamics`` (its rows of
+    dynamics.csv, :func:`klaw_ocp.results.step_table`), ``frames`` (its body frames) and
+    ``solve_s`` (the seconds it took to solve it and to build the previous step's frames)."""
+    index: int
+    result: StepResult
+    dynamics: dict
+    frames: BodyMotion
+    solve_s: float
+    closing: bool
+
+
+def step_frames(walk: Walk, k: int, fps: float) -> BodyMotion:
+    """Step ``k``'s frames of ``walk``'s body, t = i/fps in [t_start_k, t_start_k+1) (the last step's up
+    to the walk's end), equal to :func:`klaw_ocp.body_motion.body_motion`'s at those frames.
+
+    The body at a frame reads its own step and the next (the stance leg completed by the next
+    step's double support, the swing leg's landing on the next stance foot), so it is built on a
+    window from step k (k - 1 for an odd k: the window keeps the steps' legs, right for even
+    steps, left for odd) to step k + 1."""
+    steps = walk.steps
+    last = k == len(steps) - 1
+    end = walk.duration if last else steps[k + 1].t_start
+    i = np.arange(max(math.floor(steps[k].t_start * fps) - 1, 0), math.floor(end * fps + 1e-9) + 2)
+    if last:
+        i = i[i <= math.floor(end * fps + 1e-9)]     # frame_times' last frame
+    t = i / fps                                     # as frame_times makes them
+    # each frame on its own side of the heel strikes, as locate_steps puts it
+    t = t[(t >= steps[k].t_start) & ((t < end) if not last else True)]
+    start = k - (k % 2)
+    window = Walk(walk.spec, steps[start:k + 2])
+    samples = Samples(t, np.full(len(t), k - start), t - steps[k].t_start)
+    return body_motion_at(window, samples)
+
+
+class StepwiseWalk:
+    """A walk solved step by step from an experiment configuration (its body, attributes, solver,
+    first parameters, start from rest or not), whose parameters can change before any step.
+
+    - :meth:`request` asks for new locomotion parameters (any of speed km/h, step_length m,
+      step_frequency steps/min, completed with eq. 1), refused with one line if outside the
+      envelope; the walk moves to them as fast as the per-step limits allow;
+    - :meth:`stop` ends the walk at rest (the paper's closing step) after the steps already planned;
+    - :meth:`next_step` solves one more step and returns the previous one with its body frames
+      (:class:`ReadyStep`), None once the walk has ended.
+
+    It is not thread-safe: one thread drives one walk (the server gives each its own thread)."""
+
+    def __init__(self, config: ExperimentConfig, method: str | None = None):
+        if not isinstance(config, ExperimentConfig):
+            raise ConfigError(out_of_range("config", config, "a klaw_ocp.config.ExperimentConfig"))
+        self.config = config
+        first = config.plan()[0]
+        spec = walk_spec(config, method)
+        check_stance_method(spec.stance, spec.method)
+        self.body, self.attributes = spec.body, spec.attributes
+        p0 = first.parameters
+        #: the walk's base request: the first step's speed and step length, as every step's are
+        self._base = (p0.speed_kmh, p0.step_length_m)
+        #: each planned step's (v, sl) as given to eq. 1 (the completed speed may differ from it
+        #: in the last bit, so the schedule carries these, not the completed ones)
+        self._requested = [self._base]
+        self._parameters = [self._complete(*self._base, "walk")]
+        self._target = self._base
+        self._plans = [plan_step(self.body, self.attributes, 0, self._parameters[0], 0.0, 0.0,
+                                 spec.start_from_rest)]
+        self._stop_asked = False
+        self._closing_at: int | None = None
+        self.spec = replace(spec, plans=list(self._plans), end_at_rest=False)
+        self.walk = Walk(self.spec)
+        self.refusals: list[str] = []
+        with solving():
+            solver = make_solver(spec.method, intervals=spec.intervals, tolerance=spec.tolerance,
+                                 max_iterations=spec.max_iterations, nlp=spec.nlp)
+            controller = StepController(spec.body, spec.attributes, control_gains(spec.body, spec.attributes),
+                                        solver, spec.lock_rule, spec.stance)
+            self._loop = StepLoop(self.spec, controller, self._plan_of)
+        self.walk.initial_state = self._loop.initial_state.copy()
+        self._shown = 0          # the next step to hand out with its frames
+        self.ended = False
+
+    # -- the high level, one step ahead --------------------------------------------------------
+    def _complete(self, v: float, sl: float, field: str):
+        return complete_parameters(self.body, speed_kmh=v, step_length=sl, attributes=self.attributes,
+                                   field_prefix=field)
+
+    def request(self, **values) -> dict:
+        """Ask for new locomotion parameters: a subset of speed (km/h), step_length (m) and
+        step_frequency (steps/min). Returns the completed target {speed, step_length,
+        step_frequency}; raises ConfigError / GaitLimitError (one line) outside the envelope, the
+        walk going on as before."""
+        extra = sorted(set(values) - set(PARAMETER_KEYS))
+        if extra:
+            raise ConfigError(out_of_range(extra[0], values[extra[0]], "one of speed, step_length, step_frequency"))
+        p = complete_parameters(self.body, speed_kmh=values.get("speed"), step_length=values.get("step_length"),
+                                step_frequency=values.get("step_frequency"), attributes=self.attributes,
+                                field_prefix="walk")
+        check_step_length(self.body, p, len(self._plans))
+        self._target = (p.speed_kmh, p.step_length_m)
+        return {"speed": p.speed_kmh, "step_length": p.step_length_m, "step_frequency": p.step_frequency_spm}
+
+    def stop(self) -> None:
+        """End the walk at rest: the next step planned is the closing step (sl = 0)."""
+        self._stop_asked = True
+
+    def _ramped(self, previous: tuple) -> tuple:
+        """The next step's (v, sl): the target, or as far towards it as the per-step limits allow
+        (speed and step length moving together, a straight line as a schedule's ramp)."""
+        dv, dsl = self._target[0] - previous[0], self._target[1] - previous[1]
+        dv_max = self.attributes.max_speed_change_per_step
+        dsl_max = self.attributes.max_step_length_change_rel * self.body.l1
+        steps = max(abs(dv) / dv_max, abs(dsl) / dsl_max)
+        if steps <= 1.0:
+            return self._target
+        # a hair inside the limit, so that rounding never puts a step over it
+        n = math.ceil(steps * (1 + 1e-9))
+        return previous[0] + dv / n, previous[1] + dsl / n
+
+    def _plan_next(self, i: int):
+        """Step i's plan (i >= 1) from the target as it stands now, or None when the walk ends."""
+        last = self._plans[-1]
+        t, x = last.t_start + last.timings.t_step, last.constraints.next_ankle_x
+        if self._closing_at is not None:
+            return None
+        long_enough = i >= MAX_STEPS - 1 or t + last.timings.t_step > MAX_WALK_S
+        too_many_frames = (t + 2 * last.timings.t_step) * self.spec.fps > MAX_FRAMES
+        if self._stop_asked or long_enough or too_many_frames:
+            self._closing_at = i
+            return closing_step(self.body, self.attributes, last)
+        previous = self._requested[-1]
+        wanted = self._ramped(previous)
+        try:
+            p = self._complete(*wanted, f"walk.schedule[{i}]") if wanted != previous else self._parameters[-1]
+            plan = plan_step(self.body, self.attributes, i, p, t, x, self.spec.start_from_rest)
+            check_step_changes(self.body, [last.parameters, plan.parameters], self.attributes)
+        except GaitLimitError as err:     # not reachable from a checked target; kept safe all the same
+            self.refusals.append(str(err))
+            self._target, wanted, p = previous, previous, self._parameters[-1]
+            plan = plan_step(self.body, self.attributes, i, p, t, x, self.spec.start_from_rest)
+        self._requested.append(wanted)
+        self._parameters.append(p)
+        self._plans.append(plan)
+        return plan
+
+    def _plan_of(self, k: int):
+        if k < len(self._plans):
+            return self._plans[k], self._closing_at == k
+        plan = self._plan_next(k)
+        return None if plan is None else (plan, self._closing_at == k)
+
+    # -- the middle and low levels -------------------------------------------------------------
+    def next_step(self) -> ReadyStep | None:
+        """Solve the next step (if any is left) and return the oldest step not yet handed out,
+        with its frames; None once every step has been handed out. Raises
+        :class:`~klaw_ocp.errors.ConvergenceError` if a step does not converge."""
+        t0 = time.perf_counter()
+        while not self.ended and len(self.walk.steps) <= self._shown + 1:
+            with solving():
+                result = self._loop.solve_next()
+            if result is None:
+                self.ended = True
+            else:
+                self.walk.steps.append(result)
+        if self._shown >= len(self.walk.steps):
+            return None
+        k = self._shown
+        frames = step_frames(self.walk, k, self.spec.fps)
+        result = self.walk.steps[k]
+        self._shown += 1
+        return ReadyStep(k, result, step_table(result, self.body), frames, time.perf_counter() - t0,
+                         closing=self._closing_at == k)
+
+    @property
+    def steps_planned(self) -> int:
+        return len(self._plans)
+
+    def reproducing_config(self) -> ExperimentConfig:
+        """The experiment that ``klaw-ocp run`` solves into this walk, step for step: the first
+        step's speed and step length, a schedule entry at every step whose (v, sl) differs from
+        the base (eq. 1 would complete a speed interpolated between two entries from its completed
+        value, a bit off the one asked for, so every step from the first change to the last has
+        its own entry), and the number of steps solved. Only a walk
+        that has ended is the same walk again (a walking one's last step knows its next step)."""
+        if not self.ended:
+            raise ConfigError("session: still walking, allowed only once the walk has ended (stop it first)")
+        regular = self._closing_at if self._closing_at is not None else len(self.walk.steps)
+        requested = self._requested[:regular]
+        changes = [i for i in range(1, len(requested)) if requested[i] != requested[i - 1]]
+        first = next((i for i, r in enumerate(requested) if r != self._base), None)
+        span = range(first, changes[-1] + 1) if first is not None else range(0)
+        schedule = [{"step": i, "speed": requested[i][0], "step_length": requested[i][1]} for i in span]
+        data = self.config.model_dump(mode="json")
+        data["walk"] = {"speed": self._base[0], "step_length": self._base[1], "steps": regular,
+                        "schedule": schedule, "start_from_rest": self.spec.start_from_rest,
+                        "end_at_rest": self._closing_at is not None}
+        data["solver"]["method"] = self.spec.method
+        data["attributes"] = self.attributes.as_dict()
+        check_walk_size(regular, self.spec.intervals)
+        return ExperimentConfig.from_mapping(data)

@@ -1,0 +1,123 @@
+"""The walk solved step by step (#38 item 1): the same numbers as simulate_walk for the schedule it
+exports, each step's frames as the whole walk's body has them, refusals that leave it walking."""
+import numpy as np
+import pytest
+
+from klaw_ocp.body_motion import body_motion
+from klaw_ocp.config import ExperimentConfig
+from klaw_ocp.errors import ConfigError, GaitLimitError
+from klaw_ocp.gait.envelope import check_step_changes
+from klaw_ocp.result_files.bvh import bvh_text
+from klaw_ocp.stepwise import StepwiseWalk
+from klaw_ocp.walk import simulate_walk
+
+METHODS = ["multiple-shooting", "plain-shooting"]
+
+
+def config(method="multiple-shooting", **walk) -> ExperimentConfig:
+    return ExperimentConfig.from_mapping({"name": "live", "body": {"height": 1.8, "mass": 80},
+                                          "walk": {"speed": 5.0, "steps": 2, **walk},
+                                          "solver": {"method": method}})
+
+
+def drive(live: StepwiseWalk, actions: dict) -> list:
+    """Hand out every step; ``actions[k]`` runs once step k has been handed out."""
+    ready = []
+    while (step := live.next_step()) is not None:
+        ready.append(step)
+        actions.get(step.index, lambda: None)()
+    return ready
+
+
+@pytest.fixture(scope="module", params=METHODS)
+def session(request):
+    live = StepwiseWalk(config(request.param, start_from_rest=True))
+    ready = drive(live, {1: lambda: live.request(speed=3.0), 5: lambda: live.request(step_frequency=120),
+                         11: live.stop})
+    return live, ready
+
+
+def test_the_exported_schedule_solves_the_same_steps_to_the_bit(session):
+    live, _ = session
+    again = simulate_walk(live.reproducing_config())
+    assert len(again.steps) == len(live.walk.steps)
+    for a, b in zip(again.steps, live.walk.steps):
+        assert a.plan == b.plan
+        for sa, sb in zip(a.subphases, b.subphases):
+            assert np.array_equal(sa.states, sb.states) and np.array_equal(sa.t, sb.t), (a.index, sa.name)
+
+
+def test_the_bvh_of_the_session_is_the_bvh_of_its_config_byte_for_byte(session):
+    live, _ = session
+    cfg = live.reproducing_config()
+    again = simulate_walk(cfg)
+    fps = cfg.output.fps
+    assert bvh_text(body_motion(again, fps), again.spec.body, fps) == \
+        bvh_text(body_motion(live.walk, fps), live.walk.spec.body, fps)
+
+
+def test_each_steps_frames_are_the_whole_walks_frames(session):
+    live, ready = session
+    whole = body_motion(live.walk, live.spec.fps)
+    assert [r.index for r in ready] == list(range(len(live.walk.steps)))
+    t = np.concatenate([r.frames.t for r in ready])
+    assert np.array_equal(t, whole.t)       # every frame once, in order
+    # the window's step coordinate u = k + tau/t_step rounds a few ulps differently
+    np.testing.assert_allclose(np.vstack([r.frames.angles for r in ready]), whole.angles, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.vstack([r.frames.root for r in ready]), whole.root, rtol=0, atol=1e-9)
+
+
+def test_changes_ramp_within_the_per_step_limits_and_reach_their_target(session):
+    live, ready = session
+    params = [s.plan.parameters for s in live.walk.steps[:-1]]      # the closing step aside
+    check_step_changes(live.body, params, live.attributes)
+    speeds = [p.speed_kmh for p in params]
+    assert min(speeds) == pytest.approx(3.0)
+    assert params[-1].step_frequency_spm == pytest.approx(120.0)
+    assert ready[-1].closing and ready[-1].result.plan.parameters.step_length_m == 0.0
+
+
+def test_a_change_shows_from_the_third_step_after_the_one_on_screen():
+    live = StepwiseWalk(config())
+    ready = drive(live, {0: lambda: live.request(speed=4.0), 4: live.stop})
+    speeds = [r.result.plan.parameters.speed_kmh for r in ready]
+    # step 0 on screen, step 1 solved, step 2 planned: step 3 is the first that can change
+    assert speeds[:3] == [5.0, 5.0, 5.0] and speeds[3] == pytest.approx(4.0)
+
+
+@pytest.mark.parametrize("values, field", [({"speed": 30.0}, "walk.speed"), ({"step_length": 2.0}, "walk.step"),
+                                           ({"speed": -1.0}, "walk.speed"), ({"cadence": 100}, "cadence"),
+                                           ({"speed": "fast"}, "walk.speed")])
+def test_out_of_envelope_requests_are_refused_in_one_line_and_the_walk_goes_on(values, field):
+    live = StepwiseWalk(config())
+    live.next_step()
+    with pytest.raises(ConfigError) as err:
+        live.request(**values)
+    message = str(err.value)
+    assert "\n" not in message and message.startswith(field) and "allowed" in message
+    live.stop()
+    assert len(drive(live, {})) >= 1 and live.ended
+    assert all(s.plan.parameters.speed_kmh in (5.0, 0.0) for s in live.walk.steps)
+
+
+def test_a_gait_limit_is_a_gait_limit_error():
+    live = StepwiseWalk(config())
+    with pytest.raises(GaitLimitError):
+        live.request(speed=30.0)
+
+
+def test_a_walking_session_has_no_reproducing_config_yet():
+    live = StepwiseWalk(config())
+    live.next_step()
+    with pytest.raises(ConfigError, match="still walking"):
+        live.reproducing_config()
+
+
+def test_a_walk_that_is_never_changed_exports_its_plain_request():
+    live = StepwiseWalk(config())
+    for _ in range(3):
+        live.next_step()
+    live.stop()
+    drive(live, {})
+    cfg = live.reproducing_config()
+    assert cfg.walk.schedule == [] and cfg.walk.end_at_rest
