@@ -32,6 +32,7 @@ from typing import Callable
 
 from .commands import EXIT_USAGE, EXIT_WRITE_FAILED, PROG
 from .commands import compare as _compare, plan as _plan, reproduce as _reproduce, run as _run, sweep as _sweep
+from .commands import serve as _serve
 from .commands._common import report_stop, unwritten
 from .errors import ConfigError, KlawError, ResultsNotWritten, cut, one_line, short_repr
 from .stop_signals import CommandSignals
@@ -137,6 +138,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
     "compare": Subcommand(_compare.HELP, _compare.configure, _compare.handle),
     "sweep": Subcommand(_sweep.HELP, _sweep.configure, _sweep.handle),
     "reproduce": Subcommand(_reproduce.HELP, _reproduce.configure, _reproduce.handle),
+    "serve": Subcommand(_serve.HELP, _serve.configure, _serve.handle),
 }
 
 

@@ -7,7 +7,7 @@ import asyncio
 from importlib import resources
 
 from starlette.applications import Starlette
-from starlette.responses import FileResponse, JSONResponse
+from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket
@@ -91,7 +91,10 @@ def create_app(config: ExperimentConfig, limits: ServeLimits = ServeLimits()) ->
             finally:
                 state["sessions"] -= 1
 
-    routes = [Route("/", page), Route("/info", info), WebSocketRoute("/walk", walk_socket),
+    async def no_icon(request):
+        return Response(status_code=204)
+
+    routes = [Route("/", page), Route("/info", info), Route("/favicon.ico", no_icon), WebSocketRoute("/walk", walk_socket),
               Mount("/static", app=StaticFiles(directory=str(static_dir())), name="static")]
     app = Starlette(routes=routes)
     app.state.sessions = state

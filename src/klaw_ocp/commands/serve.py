@@ -1,0 +1,82 @@
+"""``klaw-ocp serve``: the live walking playground (docs/serve.md). A local web server whose page
+shows the body walking in 3D; every slider changes the walk from its next step."""
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import webbrowser
+
+from ..errors import ConfigError, out_of_range
+from ._common import add_set_option, load
+
+HELP = "open the live walking playground in a browser (a local web server)"
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 8765
+#: the walk the playground starts with when no CONFIG is given
+DEFAULT_WALK = {"name": "playground", "body": {"height": 1.8, "mass": 80.0},
+                "walk": {"speed": 5.0, "steps": 1, "start_from_rest": True}}
+
+
+def configure(p: argparse.ArgumentParser) -> None:
+    p.description = ("Serve a page on which the body walks in 3D, solved step by step one step ahead "
+                     "of what is shown: sliders for speed, step length or frequency, body, attributes and "
+                     "solver mode change the walk from its next step; the session downloads as walk.bvh "
+                     "and as a config that `klaw-ocp run` solves into the same walk. CONFIG gives the "
+                     "body, attributes, solver and first parameters (its length and schedule are the page's).")
+    p.add_argument("config", nargs="?", metavar="CONFIG", help="experiment YAML file (default: 5 km/h from rest, "
+                                                               "1.8 m, 80 kg)")
+    p.add_argument("--host", default=DEFAULT_HOST, help=f"address to listen on (default {DEFAULT_HOST}: this "
+                                                        f"machine only; another host is served with a warning)")
+    p.add_argument("--port", type=int, default=DEFAULT_PORT, help=f"port (default {DEFAULT_PORT}; 0 picks a free one)")
+    p.add_argument("--open", action="store_true", help="open the page in the default browser")
+    add_set_option(p)
+    p.epilog = "example: klaw-ocp serve --open\n         klaw-ocp serve configs/natural_walk.yaml --port 8000"
+
+
+def handle(args: argparse.Namespace) -> int:
+    try:
+        import uvicorn
+
+        from ..serve.app import create_app
+        from ..serve.limits import is_loopback
+    except ImportError as err:
+        raise ConfigError(f"serve: got no {err.name} module, allowed with the serve extra installed: "
+                          f"pip install 'klaw_ocp[serve]'") from None
+    if not 0 <= args.port <= 65535:
+        raise ConfigError(out_of_range("--port", args.port, "an integer from 0 to 65535"))
+    if args.config is not None:
+        config = load(args.config, args.sets)
+    else:
+        import copy
+
+        from ..config import ExperimentConfig
+        from ..config_paths import apply_sets
+        config = ExperimentConfig.from_mapping(apply_sets(copy.deepcopy(DEFAULT_WALK), args.sets))
+    if not is_loopback(args.host):
+        print(f"klaw-ocp: warning: serving on {args.host}: any machine that reaches it can open walks "
+              f"(at most a few at once, docs/serve.md); the default {DEFAULT_HOST} serves this machine only",
+              file=sys.stderr)
+    app = create_app(config)
+    from uvicorn.config import WS_PROTOCOLS
+    # the websockets library's current implementation where this uvicorn has it (its legacy one is deprecated)
+    ws = "websockets-sansio" if "websockets-sansio" in WS_PROTOCOLS else "websockets"
+    server = uvicorn.Server(uvicorn.Config(app, host=args.host, port=args.port, log_level="warning",
+                                           ws=ws, ws_max_size=64 * 1024, lifespan="off"))
+    shown_host = f"[{args.host}]" if ":" in args.host else args.host
+
+    def announce():
+        # the port is known once the socket is bound (--port 0)
+        while not server.started:
+            if server.should_exit:
+                return
+            threading.Event().wait(0.05)
+        port = server.servers[0].sockets[0].getsockname()[1] if server.servers else args.port
+        url = f"http://{'127.0.0.1' if args.host in ('0.0.0.0', '::') else shown_host}:{port}/"
+        print(f"klaw-ocp: serving the playground at {url} (Ctrl-C stops it)", flush=True)
+        if args.open:
+            webbrowser.open(url)
+
+    threading.Thread(target=announce, daemon=True).start()
+    server.run()
+    return 0

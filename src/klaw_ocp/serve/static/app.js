@@ -1,0 +1,198 @@
+// The playground's page: the panel, the websocket and the playback. The server sends each step
+// with its frames one step ahead of what is shown; the page says which step it begins to show,
+// and the server solves the next one then (docs/serve.md).
+import { Scene } from "./scene.js";
+import { Strips } from "./strips.js";
+
+const $ = (id) => document.getElementById(id);
+const scene = new Scene($("scene"));
+const strips = new Strips($("strip-hip"), $("strip-torque"), $("strip-gait"), $("legend"));
+const SEND_EVERY_MS = 150;     // a dragged slider sends at most this often (the server's rate limit is higher)
+const ATTRIBUTE_LABELS = { pelvic_list: "pelvic list", pelvic_rotation: "pelvic rotation",
+                           arm_swing_amplitude: "arm swing", toe_clearance: "toe clearance" };
+
+// what the browser test reads: the steps shown, each with its cadence
+const state = window.klaw = { shown: [], ended: false, connected: false, refusals: [] };
+let socket, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false;
+
+function send(message) {
+  if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(message));
+}
+
+// -- the panel ---------------------------------------------------------------------------------
+function setUpSlider(input, spec) {
+  input.min = spec.min; input.max = spec.max; input.value = spec.value;
+  const output = input.closest("label").querySelector("output");
+  const show = () => { output.textContent = Number(input.value).toFixed(input.step < 0.1 ? 3 : input.step < 1 ? 2 : 0); };
+  input.addEventListener("input", show);
+  show();
+  const allowed = input.closest(".control").querySelector(".allowed") || document.createElement("span");
+  allowed.className = "allowed note";
+  allowed.textContent = ` (supported ${spec.allowed[0].toFixed(2)} – ${spec.allowed[1].toFixed(2)} ${spec.unit})`;
+  input.closest("label").insertBefore(allowed, input);
+}
+
+function secondParameter() { return document.querySelector("input[name=second]:checked").value; }
+
+function locomotion() {
+  const values = { speed: Number($("speed").value) };
+  const second = secondParameter();
+  if (second !== "none") values[second] = Number($(second).value);
+  return values;
+}
+
+function settings() {
+  const out = { "walk.start_from_rest": $("start_from_rest").checked, "solver.method": $("method").value };
+  for (const input of document.querySelectorAll("input[type=range][data-setting]")) out[input.dataset.setting] = Number(input.value);
+  for (const [key, value] of Object.entries(locomotion())) out[`walk.${key}`] = value;
+  return out;
+}
+
+function clearRefusals() { for (const p of document.querySelectorAll(".refusal")) p.textContent = ""; }
+
+function showRefusal(field, message) {
+  state.refusals.push({ field, message });
+  // "walk.step[3].step_length" is the step-length slider's, "attributes.x" the attribute's
+  const key = field.replace(/^walk\.step\[\d+\]\./, "walk.").replace(/^walk\.schedule\[\d+\]\./, "walk.");
+  const control = document.querySelector(`.control[data-field="${key}"]`);
+  const target = control ? control.querySelector(".refusal") : $("refusal-general");
+  target.textContent = message;
+}
+
+let pending = null;
+function sendLocomotion() {
+  // throttled: the last position of a dragged slider is always sent
+  if (pending) return;
+  pending = setTimeout(() => { pending = null; send({ type: "set", values: locomotion() }); }, SEND_EVERY_MS);
+}
+
+function updateSecond() {
+  for (const name of ["step_length", "step_frequency"]) {
+    $(name).closest(".control").classList.toggle("disabled", secondParameter() !== name);
+  }
+}
+
+async function setUpPanel() {
+  const info = await (await fetch("/info")).json();
+  const e = info.envelope;
+  for (const name of ["speed", "step_length", "step_frequency", "height", "mass"]) setUpSlider($(name), e[name]);
+  for (const [name, spec] of Object.entries(e.attributes)) {
+    const div = document.createElement("div");
+    div.className = "control"; div.dataset.field = `attributes.${name}`;
+    div.innerHTML = `<label>${ATTRIBUTE_LABELS[name]} <output></output> ${spec.unit}
+      <input type="range" id="attr-${name}" step="${spec.unit === "m" ? 0.001 : 0.5}" data-setting="attributes.${name}"></label>
+      <p class="refusal"></p>`;
+    $("attributes").appendChild(div);
+    setUpSlider(div.querySelector("input"), spec);
+  }
+  $("method").innerHTML = e.methods.map((m) => `<option ${m === e.method ? "selected" : ""}>${m}</option>`).join("");
+  $("start_from_rest").checked = e.start_from_rest;
+  for (const name of ["speed", "step_length", "step_frequency"]) $(name).addEventListener("input", sendLocomotion);
+  for (const radio of document.querySelectorAll("input[name=second]")) {
+    radio.addEventListener("change", () => { updateSecond(); sendLocomotion(); });
+  }
+  updateSecond();
+  // the walker's settings make a new walk (the paper's attributes are the walker's, fixed over a walk)
+  for (const input of document.querySelectorAll("[data-setting]")) {
+    input.addEventListener("change", () => send({ type: "start", settings: settings() }));
+  }
+  $("start").addEventListener("click", () => send({ type: "start", settings: settings() }));
+  $("stop").addEventListener("click", () => send({ type: "stop" }));
+  $("download-bvh").addEventListener("click", () => { wanted = "bvh"; send({ type: "export" }); });
+  $("download-config").addEventListener("click", () => { wanted = "config"; send({ type: "export" }); });
+}
+
+let wanted = null;
+function download(name, text, type) {
+  const url = URL.createObjectURL(new Blob([text], { type }));
+  const a = Object.assign(document.createElement("a"), { href: url, download: name });
+  document.body.appendChild(a); a.click(); a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 1000);
+}
+
+// -- the socket --------------------------------------------------------------------------------
+function connect() {
+  socket = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/walk`);
+  socket.onopen = () => { state.connected = true; $("status").textContent = "connected"; };
+  socket.onclose = (event) => {
+    state.connected = false;
+    $("status").textContent = `disconnected${event.reason ? ": " + event.reason : ""}`;
+  };
+  socket.onmessage = (event) => receive(JSON.parse(event.data));
+}
+
+function receive(m) {
+  if (m.type === "skeleton") {
+    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0;
+    walkEnded = false; state.ended = false; state.shown = [];
+    clearRefusals();
+    $("download-bvh").disabled = $("download-config").disabled = true;
+    $("status").textContent = `walking (${m.method}${m.start_from_rest ? ", from rest" : ""})`;
+  } else if (m.type === "step") {
+    steps.set(m.index, m);
+    $("planned-step").textContent = m.planned.step;
+    $("planned-cadence").textContent = m.planned.step_frequency.toFixed(1);
+    $("solve-ms").textContent = m.solve_ms.toFixed(1);
+  } else if (m.type === "refused") {
+    showRefusal(m.field, m.message);
+  } else if (m.type === "accepted") {
+    for (const key of ["speed", "step_length", "step_frequency"]) {
+      const p = document.querySelector(`.control[data-field="walk.${key}"] .refusal`);
+      if (p) p.textContent = "";
+    }
+  } else if (m.type === "stopping") {
+    $("status").textContent = "stopping at rest…";
+  } else if (m.type === "ended") {
+    walkEnded = true;
+    $("download-bvh").disabled = $("download-config").disabled = false;
+  } else if (m.type === "failed") {
+    walkEnded = true; showRefusal("message", m.message);
+  } else if (m.type === "export") {
+    if (wanted === "bvh") download("walk.bvh", m.bvh, "text/plain");
+    else download(`${m.name}.yaml`, m.config, "application/yaml");
+  }
+}
+
+// -- playback ----------------------------------------------------------------------------------
+function begin(step) {
+  current = step;
+  send({ type: "shown", step: step.index });
+  state.shown.push({ index: step.index, step_frequency: step.step_frequency, speed: step.speed });
+  scene.addFootprint(step.foot, step.stance_leg);
+  strips.add(step);
+  $("step").textContent = step.index + (step.closing ? " (closing)" : "");
+  $("cadence").textContent = step.step_frequency.toFixed(1);
+  $("speed-now").textContent = step.speed.toFixed(2);
+}
+
+function tick(now) {
+  requestAnimationFrame(tick);
+  const dt = lastTick === null ? 0 : Math.min((now - lastTick) / 1000, 0.1);
+  lastTick = now;
+  if (current === null) {
+    if (steps.has(0)) { begin(steps.get(0)); walkTime = current.t_start; }
+  } else {
+    walkTime += dt;
+    const end = current.t_start + current.t_step;
+    if (walkTime >= end) {
+      const next = steps.get(current.index + 1);
+      if (next) { steps.delete(current.index - 2); begin(next); }
+      else {
+        walkTime = end;      // the next step is not here yet (or the walk ended): hold the last frame
+        if (walkEnded && !state.ended) { state.ended = true; $("status").textContent = "at rest: the walk ended"; }
+      }
+    }
+  }
+  if (current) {
+    const t = current.frames.t;
+    let i = 0;
+    while (i + 1 < t.length && t[i + 1] <= walkTime) i++;
+    if (t.length) scene.pose(current.frames.points[i]);
+    strips.draw(walkTime);
+  }
+  scene.follow = $("follow").checked;
+  scene.render();
+}
+
+setUpPanel().then(connect);
+requestAnimationFrame(tick);

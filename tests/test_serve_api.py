@@ -1,0 +1,196 @@
+"""The playground's server through its ASGI test client (#38 items 2, 4, 5, 6): steps streamed one
+ahead of the page, parameter changes, refusals that leave the walk going, a session exported and
+reproduced by `klaw-ocp run` byte for byte, the limits, sessions that end."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("httpx")
+
+from starlette.testclient import TestClient  # noqa: E402
+
+from klaw_ocp.cli import main  # noqa: E402
+from klaw_ocp.commands.serve import DEFAULT_WALK  # noqa: E402
+from klaw_ocp.config import ExperimentConfig  # noqa: E402
+from klaw_ocp.serve.app import create_app  # noqa: E402
+from klaw_ocp.serve.limits import MessageRate, ServeLimits, origin_allowed  # noqa: E402
+
+ORIGIN = {"origin": "http://testserver"}
+
+
+def app(**limits):
+    walk = {**DEFAULT_WALK, "walk": {"speed": 5.0, "steps": 1}}
+    return create_app(ExperimentConfig.from_mapping(walk), ServeLimits(**limits))
+
+
+def receive(ws, kind: str, skip=("accepted", "stopping")) -> dict:
+    """The next message of type ``kind`` (steps and the listed kinds passed over)."""
+    for _ in range(200):
+        message = json.loads(ws.receive_text())
+        if message["type"] == kind:
+            return message
+        assert message["type"] in ("step", "skeleton", *skip), message
+    raise AssertionError(f"no {kind} message")
+
+
+def walk_steps(ws, count: int) -> list:
+    """Show ``count`` steps as a page does (it says which step it shows)."""
+    steps = []
+    for _ in range(count):
+        step = receive(ws, "step")
+        ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
+        steps.append(step)
+    return steps
+
+
+@pytest.fixture
+def client():
+    with TestClient(app()) as c:
+        yield c
+
+
+def test_the_page_and_its_three_js_are_served_from_the_package(client):
+    page = client.get("/")
+    assert page.status_code == 200 and "importmap" in page.text
+    assert "//" not in "".join(part.split('"')[1] for part in page.text.split("src=")[1:])   # nothing from elsewhere
+    assert '"three": "/static/' in page.text
+    assert client.get("/static/vendor/three/three.module.js").status_code == 200
+    assert client.get("/static/vendor/three/three.core.js").status_code == 200
+    assert "MIT" in client.get("/static/vendor/three/LICENSE").text
+    assert client.get("/info").json()["envelope"]["speed"]["allowed"] == [0.5, 9.0]
+
+
+def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        skeleton = receive(ws, "skeleton")
+        assert len(skeleton["joints"]) == 37
+        first, second = receive(ws, "step"), receive(ws, "step")
+        assert (first["index"], second["index"]) == (0, 1)
+        points = first["frames"]["points"]
+        assert len(points) == len(first["frames"]["t"]) and len(points[0]) == 3 * (37 + len(skeleton["end_sites"]))
+        ws.send_text(json.dumps({"type": "shown", "step": 0}))
+        assert receive(ws, "step")["index"] == 2        # only once the page shows step 0
+
+
+def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(client):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 2)
+        ws.send_text(json.dumps({"type": "set", "values": {"speed": 30}}))
+        refused = receive(ws, "refused")
+        assert refused["field"] == "walk.speed" and refused["message"].startswith("walk.speed: got 30")
+        ws.send_text(json.dumps({"type": "set", "values": {"speed": 3.0}}))
+        assert receive(ws, "accepted")["target"]["speed"] == 3.0
+        speeds = [s["speed"] for s in walk_steps(ws, 6)]
+        assert speeds[-1] == pytest.approx(3.0) and all(abs(b - a) <= 1.0 + 1e-9 for a, b in zip(speeds, speeds[1:]))
+
+
+@pytest.mark.parametrize("text, field", [
+    ("x" * 5000, "message"), ("not json", "message"), ("[1, 2]", "type"), ('{"type": "fly"}', "type"),
+    ('{"type": "set", "values": {"speed": "fast"}}', "walk.speed"),
+    ('{"type": "set", "values": {"cadence": 100}}', "values"),
+    ('{"type": "start", "settings": {"body.height": 3.0}}', "body.height"),
+    ('{"type": "start", "settings": {"output.dir": "/etc"}}', "settings"),
+    ('{"type": "start", "settings": {"attributes.pelvic_list": 90}}', "attributes.pelvic_list"),
+    ('{"type": "shown", "step": -1}', "step"), ('{"type": "export"}', "export"),
+])
+def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text, field):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 1)
+        ws.send_text(text)
+        refused = receive(ws, "refused")
+        assert refused["field"] == field and "\n" not in refused["message"], refused
+        assert len(walk_steps(ws, 2)) == 2
+
+
+def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, tmp_path, monkeypatch):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 2)
+        ws.send_text(json.dumps({"type": "set", "values": {"speed": 4.0, "step_length": 0.7}}))
+        walk_steps(ws, 3)
+        ws.send_text(json.dumps({"type": "stop"}))
+        while (step := receive(ws, "step", skip=("accepted", "stopping", "ended")))["closing"] is False:
+            ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
+        ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
+        ws.send_text(json.dumps({"type": "export"}))
+        exported = receive(ws, "export", skip=("accepted", "stopping", "ended"))
+    config = tmp_path / "session.yaml"
+    config.write_text(exported["config"], encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(config), "--no-plots", "--no-animation", "--quiet", "--out", str(tmp_path / "run")]) == 0
+    assert (tmp_path / "run" / "walk.bvh").read_text(encoding="utf-8") == exported["bvh"]
+
+
+def test_a_new_walk_with_other_settings_replaces_the_old_one(client):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 2)
+        ws.send_text(json.dumps({"type": "start", "settings": {"body.height": 1.6, "attributes.arm_swing_amplitude": 30,
+                                                               "walk.start_from_rest": True, "walk.speed": 3.0}}))
+        skeleton = receive(ws, "skeleton")
+        assert skeleton["height"] == 1.6 and skeleton["start_from_rest"] is True
+        assert receive(ws, "step")["index"] == 0
+
+
+def test_a_foreign_origin_is_refused(client):
+    from starlette.websockets import WebSocketDisconnect
+    for headers in ({"origin": "http://evil.example"}, {}):
+        with pytest.raises(WebSocketDisconnect) as err:
+            with client.websocket_connect("/walk", headers=headers) as ws:
+                ws.receive_text()
+        assert err.value.code == 1008
+
+
+def test_origin_rules():
+    assert origin_allowed("http://127.0.0.1:8765", "127.0.0.1:8765")
+    assert origin_allowed("http://localhost:8765", "127.0.0.1:8765")
+    assert not origin_allowed("http://localhost:9999", "10.0.0.5:8765")
+    assert not origin_allowed("http://attacker.example", "127.0.0.1:8765")
+    assert not origin_allowed("null", "127.0.0.1:8765") and not origin_allowed(None, "127.0.0.1:8765")
+
+
+def test_sessions_past_the_limit_are_told_so_and_the_first_ones_go_on():
+    from starlette.websockets import WebSocketDisconnect
+    with TestClient(app(max_sessions=1)) as c:
+        with c.websocket_connect("/walk", headers=ORIGIN) as first:
+            walk_steps(first, 1)
+            with pytest.raises(WebSocketDisconnect) as err:
+                with c.websocket_connect("/walk", headers=ORIGIN) as second:
+                    second.receive_text()
+            assert err.value.code == 1013 and "sessions" in err.value.reason
+            assert len(walk_steps(first, 1)) == 1
+        assert c.get("/info").json()["sessions"] == 0
+        with c.websocket_connect("/walk", headers=ORIGIN) as again:       # the slot is free again
+            assert receive(again, "step")["index"] == 0
+
+
+def test_a_page_that_sends_too_fast_is_refused_and_keeps_walking():
+    with TestClient(app(max_messages_per_s=1.0, burst=3)) as c:
+        with c.websocket_connect("/walk", headers=ORIGIN) as ws:
+            for _ in range(6):
+                ws.send_text('{"type": "shown", "step": 0}')
+            refused = receive(ws, "refused")
+            assert refused["field"] == "message" and "messages a second" in refused["message"]
+
+
+def test_the_message_rate_refills():
+    now = [0.0]
+    rate = MessageRate(2.0, 2, clock=lambda: now[0])
+    assert rate.allow() and rate.allow() and not rate.allow()
+    now[0] += 0.5
+    assert rate.allow() and not rate.allow()
+
+
+def test_serve_refuses_a_bad_port_in_one_line(capsys):
+    assert main(["serve", "--port", "70000"]) == 2
+    assert capsys.readouterr().err.strip() == "klaw-ocp: error: --port: got 70000, allowed an integer from 0 to 65535"
+
+
+def test_closed_tabs_free_their_sessions(client):
+    for _ in range(5):
+        with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+            receive(ws, "step")         # closed mid-walk, a step perhaps being solved
+    assert client.get("/info").json()["sessions"] == 0
+    assert Path(__file__).exists()
