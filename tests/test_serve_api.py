@@ -38,11 +38,11 @@ def receive(ws, kind: str, skip=("accepted", "stopping")) -> dict:
 
 
 def walk_steps(ws, count: int) -> list:
-    """Show ``count`` steps as a page does (it says which step it shows)."""
+    """Show ``count`` steps as a page does (it asks for the next one while showing one)."""
     steps = []
     for _ in range(count):
         step = receive(ws, "step")
-        ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
+        ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
         steps.append(step)
     return steps
 
@@ -68,12 +68,16 @@ def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
         skeleton = receive(ws, "skeleton")
         assert len(skeleton["joints"]) == 37
-        first, second = receive(ws, "step"), receive(ws, "step")
-        assert (first["index"], second["index"]) == (0, 1)
+        first = receive(ws, "step")
         points = first["frames"]["points"]
+        assert first["index"] == 0 and first["planned"]["step"] == 2
         assert len(points) == len(first["frames"]["t"]) and len(points[0]) == 3 * (37 + len(skeleton["end_sites"]))
-        ws.send_text(json.dumps({"type": "shown", "step": 0}))
-        assert receive(ws, "step")["index"] == 2        # only once the page shows step 0
+        ws.send_text(json.dumps({"type": "need", "step": 5}))         # no further than the step after those sent
+        assert receive(ws, "step")["index"] == 1
+        ws.send_text(json.dumps({"type": "export"}))                   # the next message: nothing was solved meanwhile
+        assert receive(ws, "refused")["field"] == "export"
+        ws.send_text(json.dumps({"type": "need", "step": 2}))
+        assert receive(ws, "step")["index"] == 2
 
 
 def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(client):
@@ -95,7 +99,7 @@ def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(
     ('{"type": "start", "settings": {"body.height": 3.0}}', "body.height"),
     ('{"type": "start", "settings": {"output.dir": "/etc"}}', "settings"),
     ('{"type": "start", "settings": {"attributes.pelvic_list": 90}}', "attributes.pelvic_list"),
-    ('{"type": "shown", "step": -1}', "step"), ('{"type": "export"}', "export"),
+    ('{"type": "need", "step": -1}', "step"), ('{"type": "export"}', "export"),
 ])
 def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text, field):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
@@ -113,8 +117,7 @@ def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, t
         walk_steps(ws, 3)
         ws.send_text(json.dumps({"type": "stop"}))
         while (step := receive(ws, "step", skip=("accepted", "stopping", "ended")))["closing"] is False:
-            ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
-        ws.send_text(json.dumps({"type": "shown", "step": step["index"]}))
+            ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
         ws.send_text(json.dumps({"type": "export"}))
         exported = receive(ws, "export", skip=("accepted", "stopping", "ended"))
     config = tmp_path / "session.yaml"
@@ -170,7 +173,7 @@ def test_a_page_that_sends_too_fast_is_refused_and_keeps_walking():
     with TestClient(app(max_messages_per_s=1.0, burst=3)) as c:
         with c.websocket_connect("/walk", headers=ORIGIN) as ws:
             for _ in range(6):
-                ws.send_text('{"type": "shown", "step": 0}')
+                ws.send_text('{"type": "need", "step": 0}')
             refused = receive(ws, "refused")
             assert refused["field"] == "message" and "messages a second" in refused["message"]
 

@@ -22,13 +22,9 @@ class ServeLimits:
     #: walks solved at once; a page past it is told so and closed (each walk is a thread of its
     #: own and about 20 MB: docs/serve.md)
     max_sessions: int = 4
-    #: steps handed to a page that it has not started to show yet: the step on screen's next one
-    #: is ready, nothing further is solved until the page moves on, so a page that stops reading
-    #: (a background tab, a slow browser) holds no more than this
+    #: how far past the steps sent a page may ask: the step after the one on screen, nothing
+    #: further, so a page that stops reading (a background tab, a slow browser) holds one step
     steps_ahead: int = 1
-    #: seconds a page may stay silent while it has steps to show before its walk waits
-    #: (it is closed after ``idle_s``)
-    idle_s: float = 600.0
 
 
 class MessageRate:

@@ -10,9 +10,10 @@ From the page:
 - ``{"type": "set", "values": {"speed": 4.2, "step_length": 0.7}}``: new locomotion parameters
   from the next step that can change (a subset of speed km/h, step_length m, step_frequency
   steps/min, completed with eq. 1);
-- ``{"type": "stop"}``: end the walk at rest; ``{"type": "shown", "step": k}``: the page began to
-  show step k (the walk runs one step ahead of it); ``{"type": "export"}``: the ended walk as
-  walk.bvh and as the config that ``klaw-ocp run`` solves into it.
+- ``{"type": "stop"}``: end the walk at rest; ``{"type": "need", "step": k}``: the page will show
+  step k soon (it asks while the step before is on screen; the server solves nothing further);
+  ``{"type": "export"}``: the ended walk as walk.bvh and as the config that ``klaw-ocp run``
+  solves into it.
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from ..gait.plan import PARAMETER_KEYS, stance_leg
 #: The settings a walk may be started with, besides ``attributes.NAME`` for any attribute.
 SETTINGS = ("body.height", "body.mass", "solver.method", "walk.start_from_rest",
             "walk.speed", "walk.step_length", "walk.step_frequency")
-TYPES = ("start", "set", "stop", "shown", "export")
+TYPES = ("start", "set", "stop", "need", "export")
 #: The dynamics columns a step carries to the page's strips.
 STRIP_COLUMNS = ("t", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "F_theta3", "F_theta4")
 
@@ -69,7 +70,7 @@ def parse(text, max_bytes: int) -> dict:
         for key, value in values.items():
             _number(f"walk.{key}", value)
         return {"type": kind, "values": values}
-    if kind == "shown":
+    if kind == "need":
         step = message.get("step")
         if isinstance(step, bool) or not isinstance(step, int) or step < 0:
             raise refusal("step", step, "an integer >= 0")

@@ -2,9 +2,11 @@
 websocket, one step ahead of what the page shows.
 
 Two tasks per connection: one reads the page's messages (each checked, refused in one line, never
-a crash), one hands out steps. A step is solved in a worker thread only when the page has begun to
-show the step before the one it will get (``ServeLimits.steps_ahead``), so the steps waiting for a
-slow page are bounded, and a page that stops reading stops its walk, never another's. A closed
+a crash), one hands out steps. A step is solved in a worker thread only when the page asks for it
+(``{"type": "need", "step": k}``, at most ``ServeLimits.steps_ahead`` beyond the steps sent), which
+it does a little before the step on screen ends: so the steps waiting for a slow page are bounded,
+a page that stops reading stops its own walk and no other, and a change made during a step reaches
+the walk as early as the plan allows (the step solved is the one after the next, docs/serve.md). A closed
 page cancels both tasks; the step being solved, if any, finishes in its thread (a few
 milliseconds) and is dropped with the walk.
 """
@@ -29,7 +31,7 @@ class LiveSession:
         self.ws, self.base, self.limits = websocket, base, limits
         self.rate = MessageRate(limits.max_messages_per_s, limits.burst)
         self.live: StepwiseWalk | None = None
-        self.shown = -1              # the step the page shows (it says so)
+        self.asked = 0               # the last step the page asked for (step 0 it needs at once)
         self.sent = -1               # the last step sent
         self.wake = asyncio.Event()  # something changed: the sender looks again
         self.send_lock = asyncio.Lock()
@@ -85,8 +87,8 @@ class LiveSession:
             if self.live is not None:
                 self.live.stop()
                 await self.send({"type": "stopping"})
-        elif kind == "shown":
-            self.shown = max(self.shown, min(message["step"], self.sent))
+        elif kind == "need":
+            self.asked = max(self.asked, min(message["step"], self.sent + self.limits.steps_ahead))
             self.wake.set()
         elif kind == "export":
             await self._export()
@@ -95,7 +97,7 @@ class LiveSession:
         """A new walk with ``settings``; refused (the old walk going on) if they are not a walk."""
         config = ExperimentConfig.from_mapping(apply_settings(self.base, settings))
         live = await asyncio.to_thread(StepwiseWalk, config)
-        self.live, self.shown, self.sent = live, -1, -1
+        self.live, self.asked, self.sent = live, 0, -1
         await self.send({**skeleton_message(live.body), "fps": live.spec.fps, "method": live.spec.method,
                          "start_from_rest": live.spec.start_from_rest})
         self.wake.set()
@@ -119,7 +121,7 @@ class LiveSession:
             await self.wake.wait()
             self.wake.clear()
             live = self.live
-            while live is not None and live is self.live and self.sent - self.shown <= self.limits.steps_ahead:
+            while live is not None and live is self.live and self.sent < self.asked:
                 try:
                     ready = await asyncio.to_thread(live.next_step)
                 except ConvergenceError as err:
@@ -128,8 +130,7 @@ class LiveSession:
                     break
                 if live is not self.live:        # a new walk started meanwhile: drop the old one's step
                     break
-                if ready is None:
-                    await self.send({"type": "ended", "steps": len(live.walk.steps)})
+                if ready is None:       # nothing left (the last step was sent with its "ended")
                     break
                 self.sent = ready.index
                 planned = live._plans[-1]
@@ -137,3 +138,6 @@ class LiveSession:
                                              {"step": planned.index,
                                               "step_frequency": planned.parameters.step_frequency_spm,
                                               "speed": planned.parameters.speed_kmh}))
+                if live.ended and self.sent == len(live.walk.steps) - 1:
+                    await self.send({"type": "ended", "steps": len(live.walk.steps)})
+                    break

@@ -1,19 +1,21 @@
 // The playground's page: the panel, the websocket and the playback. The server sends each step
-// with its frames one step ahead of what is shown; the page says which step it begins to show,
-// and the server solves the next one then (docs/serve.md).
+// with its frames when the page asks for it, which it does NEED_BEFORE_END_S before the step on
+// screen ends: the next step is ready in time, and a change made before then reaches the walk
+// one step earlier than if it were asked for at the start of the step (docs/serve.md).
 import { Scene } from "./scene.js";
 import { Strips } from "./strips.js";
 
 const $ = (id) => document.getElementById(id);
 const scene = new Scene($("scene"));
 const strips = new Strips($("strip-hip"), $("strip-torque"), $("strip-gait"), $("legend"));
+const NEED_BEFORE_END_S = 0.25;   // the server solves a step in 10-20 ms; a step lasts 0.35 s or more
 const SEND_EVERY_MS = 150;     // a dragged slider sends at most this often (the server's rate limit is higher)
 const ATTRIBUTE_LABELS = { pelvic_list: "pelvic list", pelvic_rotation: "pelvic rotation",
                            arm_swing_amplitude: "arm swing", toe_clearance: "toe clearance" };
 
 // what the browser test reads: the steps shown, each with its cadence
-const state = window.klaw = { shown: [], ended: false, connected: false, refusals: [] };
-let socket, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false;
+const state = window.klaw = { shown: [], planned: [], ended: false, connected: false, refusals: [], accepted: null };
+let socket, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false, asked = 0;
 
 function send(message) {
   if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(message));
@@ -59,11 +61,14 @@ function showRefusal(field, message) {
   target.textContent = message;
 }
 
-let pending = null;
+let pending = null, lastSent = 0;
 function sendLocomotion() {
-  // throttled: the last position of a dragged slider is always sent
+  // throttled: the first move is sent at once, then at most every SEND_EVERY_MS, and the last
+  // position of a dragged slider always
+  const wait = lastSent + SEND_EVERY_MS - performance.now();
   if (pending) return;
-  pending = setTimeout(() => { pending = null; send({ type: "set", values: locomotion() }); }, SEND_EVERY_MS);
+  pending = setTimeout(() => { pending = null; lastSent = performance.now(); send({ type: "set", values: locomotion() }); },
+                       Math.max(wait, 0));
 }
 
 function updateSecond() {
@@ -123,19 +128,21 @@ function connect() {
 
 function receive(m) {
   if (m.type === "skeleton") {
-    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0;
-    walkEnded = false; state.ended = false; state.shown = [];
+    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0;
+    walkEnded = false; state.ended = false; state.shown = []; state.planned = [];
     clearRefusals();
     $("download-bvh").disabled = $("download-config").disabled = true;
     $("status").textContent = `walking (${m.method}${m.start_from_rest ? ", from rest" : ""})`;
   } else if (m.type === "step") {
     steps.set(m.index, m);
     $("planned-step").textContent = m.planned.step;
+    state.planned.push(m.planned);
     $("planned-cadence").textContent = m.planned.step_frequency.toFixed(1);
     $("solve-ms").textContent = m.solve_ms.toFixed(1);
   } else if (m.type === "refused") {
     showRefusal(m.field, m.message);
   } else if (m.type === "accepted") {
+    state.accepted = { on_screen: current ? current.index : null, target: m.target };
     for (const key of ["speed", "step_length", "step_frequency"]) {
       const p = document.querySelector(`.control[data-field="walk.${key}"] .refusal`);
       if (p) p.textContent = "";
@@ -156,7 +163,6 @@ function receive(m) {
 // -- playback ----------------------------------------------------------------------------------
 function begin(step) {
   current = step;
-  send({ type: "shown", step: step.index });
   state.shown.push({ index: step.index, step_frequency: step.step_frequency, speed: step.speed });
   scene.addFootprint(step.foot, step.stance_leg);
   strips.add(step);
@@ -174,6 +180,10 @@ function tick(now) {
   } else {
     walkTime += dt;
     const end = current.t_start + current.t_step;
+    if (!current.closing && asked <= current.index && walkTime >= end - NEED_BEFORE_END_S) {
+      asked = current.index + 1;
+      send({ type: "need", step: asked });
+    }
     if (walkTime >= end) {
       const next = steps.get(current.index + 1);
       if (next) { steps.delete(current.index - 2); begin(next); }
