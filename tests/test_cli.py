@@ -123,7 +123,7 @@ def test_argparse_errors_exit_2(capsys):
 
 
 #: Every subcommand the CLI documents (cli.py's docstring, README): none may go missing.
-COMMANDS = {"plan", "validate", "run", "plot", "compare", "sweep", "reproduce"}
+COMMANDS = {"plan", "validate", "run", "plot", "compare", "sweep", "reproduce", "serve"}
 
 
 def test_subcommands_are_a_registry(capsys):

@@ -9,7 +9,8 @@ a handler ``(args) -> exit code``; adding one is one more dict entry.
 - ``run``: one walk, its result files and plots; ``plot``: the plots of a finished run again;
 - ``compare``: runs (solver modes, stance formulations, configs or finished folders) side by side;
 - ``sweep``: a grid of config values;
-- ``reproduce``: the paper's figures 8 and 10 and its numbers, into results/paper/.
+- ``reproduce``: the paper's figures 8 and 10 and its numbers, into results/paper/;
+- ``serve``: the live walking playground, a local web server (docs/serve.md).
 
 Errors: every :class:`klaw_ocp.errors.KlawError` becomes one line on stderr,
 ``klaw-ocp: error: <message>``, and exit code 2. So does every command-line error argparse

@@ -22,14 +22,16 @@ export class Scene {
     const sun = new THREE.DirectionalLight(0xffffff, 1.5);
     sun.position.set(3, 6, 4);
     this.scene.add(sun);
-    // the ground: a plane with a 0.5 m grid on it, along the walk (x from -5 m to 195 m)
-    const ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 40), new THREE.MeshStandardMaterial({ color: 0xc9d3c4, roughness: 1 }));
-    ground.rotation.x = -Math.PI / 2;
-    ground.position.set(95, -0.002, 0);
-    this.scene.add(ground);
-    const grid = new THREE.GridHelper(200, 400, 0x6d7d88, 0x95a3a8);
-    grid.position.set(95, 0, 0);
-    this.scene.add(grid);
+    // the ground: a plane with a 0.5 m grid on it, 40 m square, moved with the body in whole
+    // grid cells (so the lines stand still under the feet)
+    this.ground = new THREE.Group();
+    const plane = new THREE.Mesh(new THREE.PlaneGeometry(40, 40), new THREE.MeshStandardMaterial({ color: 0xc9d3c4, roughness: 1 }));
+    plane.rotation.x = -Math.PI / 2;
+    plane.position.y = -0.01;
+    const grid = new THREE.GridHelper(40, 80, 0x55656f, 0x8d9ba1);
+    grid.position.y = 0.001;
+    this.ground.add(plane, grid);
+    this.scene.add(this.ground);
     this.follow = true;
     this.bones = [];
     this.footprints = [];
@@ -73,7 +75,7 @@ export class Scene {
   addFootprint(foot, side) {
     const mesh = new THREE.Mesh(new THREE.BoxGeometry(0.26, 0.004, 0.09),
                                 new THREE.MeshStandardMaterial({ color: LEG_COLOURS[side], transparent: true, opacity: 0.55 }));
-    mesh.position.set(foot.x + 0.07, 0.002, foot.z);
+    mesh.position.set(foot.x + 0.07, 0.004, foot.z);
     this.scene.add(mesh);
     this.footprints.push(mesh);
     if (this.footprints.length > MAX_FOOTPRINTS) this.scene.remove(this.footprints.shift());
@@ -96,6 +98,7 @@ export class Scene {
       this.head.mesh.position.addVectors(a, b).multiplyScalar(0.5);
     }
     const rootX = points[0];
+    this.ground.position.x = Math.round(rootX / 0.5) * 0.5;
     if (this.follow) {
       // the follow camera keeps its offset from the pelvis as the body walks on
       const dx = rootX - this.lastRootX;

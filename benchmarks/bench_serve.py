@@ -1,0 +1,101 @@
+"""Benchmark: the playground's step, solved with its body frames and ready to send (#38, "Speed").
+
+    python benchmarks/bench_serve.py [--steps 200] [--json]
+
+1. The natural walk (5 km/h, 1.8 m, 80 kg, multiple shooting), ``--steps`` steps after five warm-up
+   steps: for each, the time from asking for it to its message ready to send, as the server does
+   it (:meth:`klaw_ocp.stepwise.StepwiseWalk.next_step`: the next step solved and this step's body
+   frames on their window, then :func:`klaw_ocp.serve.protocol.step_message` and ``json.dumps``),
+   split into the solve, the frames, dynamics.csv's rows and the message. p50 and p99 of each.
+2. How far ahead the next step is ready, at speeds across the envelope (0.5 to 9 km/h at eq. 1's
+   natural step, in both solver modes): the step's duration over the time to make the next one
+   ready (a step is asked for as the one before begins, at the latest 0.25 s before it ends: the
+   ratio says how many times over that time would have made it). The smallest over the steps.
+
+The machine's load average is printed beside: the machine is shared, and a loaded one stretches
+every number. Timings are measured here and in docs/performance.md, never asserted in tests.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from klaw_ocp.config import ExperimentConfig
+from klaw_ocp.results import step_table
+from klaw_ocp.serve.protocol import step_message
+from klaw_ocp.solvers.thread_safety import solving
+from klaw_ocp.stepwise import ReadyStep, StepwiseWalk, step_frames
+
+SPEEDS_KMH = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+
+
+def config(speed: float, method: str = "multiple-shooting") -> ExperimentConfig:
+    return ExperimentConfig.from_mapping({"name": "bench", "body": {"height": 1.8, "mass": 80.0},
+                                          "walk": {"speed": speed, "steps": 1}, "solver": {"method": method}})
+
+
+def timed_step(live: StepwiseWalk) -> dict:
+    """One step made ready as StepwiseWalk.next_step makes it, each part timed (ms)."""
+    t0 = time.perf_counter()
+    with solving():
+        result = live._loop.solve_next()          # noqa: SLF001 - the parts of next_step, timed
+    live.walk.steps.append(result)
+    t1 = time.perf_counter()
+    k = live._shown                                # noqa: SLF001
+    frames = step_frames(live.walk, k, live.spec.fps)
+    t2 = time.perf_counter()
+    table = step_table(live.walk.steps[k], live.body)
+    t3 = time.perf_counter()
+    live._shown += 1                               # noqa: SLF001
+    ready = ReadyStep(k, live.walk.steps[k], table, frames, t3 - t0, False)
+    planned = live._plans[-1]                      # noqa: SLF001
+    json.dumps(step_message(ready, live.body, live.attributes, {"step": planned.index}), allow_nan=False)
+    t4 = time.perf_counter()
+    return {"solve": t1 - t0, "frames": t2 - t1, "table": t3 - t2, "message": t4 - t3, "total": t4 - t0,
+            "t_step": live.walk.steps[k].plan.timings.t_step}
+
+
+def natural(steps: int) -> dict:
+    live = StepwiseWalk(config(5.0))
+    for _ in range(5):
+        live.next_step()
+    rows = [timed_step(live) for _ in range(steps)]
+    out = {}
+    for part in ("solve", "frames", "table", "message", "total"):
+        ms = np.array([r[part] for r in rows]) * 1000
+        out[part] = {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
+    return out
+
+
+def ahead(speed: float, method: str, steps: int = 12) -> float:
+    live = StepwiseWalk(config(speed, method))
+    live.next_step()
+    rows = [timed_step(live) for _ in range(steps)]
+    return min(r["t_step"] / r["total"] for r in rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    load = os.getloadavg()[0]
+    result = {"load_average": load, "natural": natural(args.steps), "ahead": {}}
+    for line, values in result["natural"].items():
+        print(f"natural walk, {line:8s}: p50 {values['p50_ms']:6.2f} ms  p99 {values['p99_ms']:6.2f} ms")
+    for method in ("multiple-shooting", "plain-shooting"):
+        ratios = {speed: ahead(speed, method) for speed in SPEEDS_KMH}
+        result["ahead"][method] = ratios
+        print(f"ready ahead ({method}): " + ", ".join(f"{v:g} km/h {r:.0f}x" for v, r in ratios.items())
+              + f"; smallest {min(ratios.values()):.1f}x")
+    print(f"load average {load:.2f} on {os.cpu_count()} cores (a shared machine: a loaded one stretches every number)")
+    if args.json:
+        print(json.dumps(result))
+
+
+if __name__ == "__main__":
+    main()
