@@ -10,14 +10,12 @@ import time
 
 @contextlib.contextmanager
 def running_server(app):
-    import uvicorn
-    from uvicorn.config import WS_PROTOCOLS
+    from klaw_ocp.serve.server import make_server
     sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     sock.bind(("127.0.0.1", 0))
     port = sock.getsockname()[1]
-    ws = "websockets-sansio" if "websockets-sansio" in WS_PROTOCOLS else "websockets"
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws=ws, lifespan="off"))
+    server = make_server(app, "127.0.0.1", port)
     server.install_signal_handlers = lambda: None     # older uvicorn: not from a thread
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()

@@ -36,10 +36,11 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 def handle(args: argparse.Namespace) -> int:
     try:
-        import uvicorn
+        import uvicorn  # noqa: F401 - the serve extra's packages, checked before anything else
 
         from ..serve.app import create_app
         from ..serve.limits import is_loopback
+        from ..serve.server import make_server
     except ImportError as err:
         raise ConfigError(f"serve: got no {err.name} module, allowed with the serve extra installed: "
                           f"pip install 'klaw_ocp[serve]'") from None
@@ -57,12 +58,7 @@ def handle(args: argparse.Namespace) -> int:
         print(f"klaw-ocp: warning: serving on {args.host}: any machine that reaches it can open walks "
               f"(at most a few at once, docs/serve.md); the default {DEFAULT_HOST} serves this machine only",
               file=sys.stderr)
-    app = create_app(config)
-    from uvicorn.config import WS_PROTOCOLS
-    # the websockets library's current implementation where this uvicorn has it (its legacy one is deprecated)
-    ws = "websockets-sansio" if "websockets-sansio" in WS_PROTOCOLS else "websockets"
-    server = uvicorn.Server(uvicorn.Config(app, host=args.host, port=args.port, log_level="warning",
-                                           ws=ws, ws_max_size=64 * 1024, lifespan="off"))
+    server = make_server(create_app(config), args.host, args.port)
     shown_host = f"[{args.host}]" if ":" in args.host else args.host
 
     def announce():

@@ -4,6 +4,7 @@ serve them: docs/serve.md says why."""
 from __future__ import annotations
 
 import asyncio
+import weakref
 from importlib import resources
 
 from starlette.applications import Starlette
@@ -64,6 +65,8 @@ def create_app(config: ExperimentConfig, limits: ServeLimits = ServeLimits()) ->
     base["output"] = {"fps": config.output.fps}
     slots = asyncio.Semaphore(limits.max_sessions)
     state = {"sessions": 0}
+    #: every page's walk while something holds it: empty again once the pages are closed (the tests' check)
+    walks = weakref.WeakSet()
     ranges = envelope(config)
 
     async def page(request):
@@ -87,7 +90,9 @@ def create_app(config: ExperimentConfig, limits: ServeLimits = ServeLimits()) ->
             state["sessions"] += 1
             try:
                 await websocket.accept()
-                await LiveSession(websocket, base, limits).run()
+                session = LiveSession(websocket, base, limits)
+                walks.add(session)
+                await session.run()
             finally:
                 state["sessions"] -= 1
 
@@ -97,5 +102,5 @@ def create_app(config: ExperimentConfig, limits: ServeLimits = ServeLimits()) ->
     routes = [Route("/", page), Route("/info", info), Route("/favicon.ico", no_icon), WebSocketRoute("/walk", walk_socket),
               Mount("/static", app=StaticFiles(directory=str(static_dir())), name="static")]
     app = Starlette(routes=routes)
-    app.state.sessions = state
+    app.state.sessions, app.state.walks = state, walks
     return app
