@@ -121,3 +121,12 @@ def test_a_walk_that_is_never_changed_exports_its_plain_request():
     drive(live, {})
     cfg = live.reproducing_config()
     assert cfg.walk.schedule == [] and cfg.walk.end_at_rest
+
+
+def test_a_walk_from_rest_ramps_up_to_its_speed_and_reproduces():
+    live = StepwiseWalk(config(speed=7.0, start_from_rest=True))
+    drive(live, {6: live.stop})
+    speeds = [s.plan.parameters.speed_kmh for s in live.walk.steps[:-1]]
+    assert speeds[0] == 5.0 and speeds[-1] == pytest.approx(7.0)     # start_speed_max, then 1 km/h a step
+    again = simulate_walk(live.reproducing_config())
+    assert [s.plan for s in again.steps] == [s.plan for s in live.walk.steps]

@@ -94,11 +94,15 @@ class StepwiseWalk:
         if not isinstance(config, ExperimentConfig):
             raise ConfigError(out_of_range("config", config, "a klaw_ocp.config.ExperimentConfig"))
         self.config = config
-        first = config.plan()[0]
         spec = walk_spec(config, method)
         check_stance_method(spec.stance, spec.method)
         self.body, self.attributes = spec.body, spec.attributes
-        p0 = first.parameters
+        request = config.walk.request()
+        # the walk asked for, before a start from rest's ramp caps its first steps (plan_step
+        # applies that ramp to every step, as plan_steps does)
+        p0 = (complete_parameters(self.body, speed_kmh=request["speed"], step_length=request["step_length"],
+                                  step_frequency=request["step_frequency"], attributes=self.attributes)
+              if any(v is not None for v in request.values()) else spec.plans[0].parameters)
         #: the walk's base request: the first step's speed and step length, as every step's are
         self._base = (p0.speed_kmh, p0.step_length_m)
         #: each planned step's (v, sl) as given to eq. 1 (the completed speed may differ from it
