@@ -12,6 +12,10 @@
    ready (a step is asked for as the one before begins, at the latest 0.25 s before it ends: the
    ratio says how many times over that time would have made it). The smallest over the steps.
 
+3. Memory: the process's resident size after one page's walk (warm: solvers built, kernels loaded),
+   then after 20 more pages that each walked 10 steps and closed, through the ASGI test client:
+   what sessions leave behind once they end.
+
 The machine's load average is printed beside: the machine is shared, and a loaded one stretches
 every number. Timings are measured here and in docs/performance.md, never asserted in tests.
 """
@@ -78,6 +82,38 @@ def ahead(speed: float, method: str, steps: int = 12) -> float:
     return min(r["t_step"] / r["total"] for r in rows)
 
 
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def memory(pages: int = 20, steps: int = 10) -> dict:
+    import gc
+
+    from starlette.testclient import TestClient
+
+    from klaw_ocp.serve.app import create_app
+
+    def walk_a_page(client):
+        with client.websocket_connect("/walk", headers={"origin": "http://testserver"}) as ws:
+            sent = 0
+            while sent < steps:
+                message = json.loads(ws.receive_text())
+                if message["type"] == "step":
+                    sent += 1
+                    ws.send_text(json.dumps({"type": "need", "step": message["index"] + 1}))
+
+    with TestClient(create_app(config(5.0))) as client:
+        walk_a_page(client)
+        gc.collect()
+        idle = rss_mb()
+        for _ in range(pages):
+            walk_a_page(client)
+        gc.collect()
+        time.sleep(0.5)
+        return {"idle_mb": idle, "after_mb": rss_mb(), "pages": pages, "live_walks_left": len(client.app.state.walks)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=200)
@@ -92,6 +128,9 @@ def main() -> None:
         result["ahead"][method] = ratios
         print(f"ready ahead ({method}): " + ", ".join(f"{v:g} km/h {r:.0f}x" for v, r in ratios.items())
               + f"; smallest {min(ratios.values()):.1f}x")
+    result["memory"] = m = memory()
+    print(f"memory: {m['idle_mb']:.0f} MB after one page, {m['after_mb']:.0f} MB after {m['pages']} more "
+          f"(walks left alive: {m['live_walks_left']})")
     print(f"load average {load:.2f} on {os.cpu_count()} cores (a shared machine: a loaded one stretches every number)")
     if args.json:
         print(json.dumps(result))

@@ -88,7 +88,9 @@ class StepwiseWalk:
     - :meth:`next_step` solves one more step and returns the previous one with its body frames
       (:class:`ReadyStep`), None once the walk has ended.
 
-    It is not thread-safe: one thread drives one walk (the server gives each its own thread)."""
+    One thread at a time calls :meth:`next_step` (the server: a worker thread per step);
+    :meth:`request` and :meth:`stop` may be called from another thread meanwhile, as they only set
+    what the next plan reads (one assignment each)."""
 
     def __init__(self, config: ExperimentConfig, method: str | None = None):
         if not isinstance(config, ExperimentConfig):
