@@ -95,6 +95,13 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         print(f"cadence changed on screen {first - on_screen} steps after the step on screen at the change")
         assert 1 <= first - on_screen <= 4, (on_screen, [round(s["step_frequency"]) for s in shown])
         assert browser.execute_script("return window.klaw.refusals.length") == 0
+        # past the envelope: the CLI's one line under the slider, and the walk goes on
+        browser.execute_script("""const s = document.getElementById("speed"); s.value = 11.5;
+                                  s.dispatchEvent(new Event("input"));""")
+        line = wait_for(browser, """return document.querySelector('.control[data-field="walk.speed"] .refusal').textContent""")
+        assert line == "walk.speed: got 11.5 km/h, allowed 0.5 to 9 km/h (attributes.speed_min/speed_max)"
+        walked = len(browser.execute_script("return window.klaw.shown"))
+        wait_for(browser, f"return window.klaw.shown.length >= {walked + 1}")
         shot = tmp_path / "playground.png"
         browser.save_screenshot(str(shot))
     _not_blank(shot)
