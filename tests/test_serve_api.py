@@ -189,6 +189,15 @@ def test_serve_refuses_a_bad_port_in_one_line(capsys):
     assert capsys.readouterr().err.strip() == "klaw-ocp: error: --port: got 70000, allowed an integer from 0 to 65535"
 
 
+def test_serve_refuses_a_port_in_use_in_one_line(capsys):
+    import socket
+    with socket.create_server(("127.0.0.1", 0)) as taken:
+        port = taken.getsockname()[1]
+        assert main(["serve", "--port", str(port)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"klaw-ocp: error: --port: got {port}, allowed a port free on 127.0.0.1") and "\n" not in err
+
+
 def test_closed_tabs_free_their_walks_at_once(client):
     import gc
     import time

@@ -58,6 +58,7 @@ def handle(args: argparse.Namespace) -> int:
         print(f"klaw-ocp: warning: serving on {args.host}: any machine that reaches it can open walks "
               f"(at most a few at once, docs/serve.md); the default {DEFAULT_HOST} serves this machine only",
               file=sys.stderr)
+    sock = _bound_socket(args.host, args.port)
     server = make_server(create_app(config), args.host, args.port)
     shown_host = f"[{args.host}]" if ":" in args.host else args.host
 
@@ -74,5 +75,19 @@ def handle(args: argparse.Namespace) -> int:
             webbrowser.open(url)
 
     threading.Thread(target=announce, daemon=True).start()
-    server.run()
+    server.run(sockets=[sock])
     return 0
+
+
+def _bound_socket(host: str, port: int):
+    """The listening socket, bound here so that a port in use or an unknown host is one line
+    naming the flag (uvicorn would log it and exit)."""
+    import socket
+    try:
+        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    except (socket.gaierror, UnicodeError) as err:
+        raise ConfigError(out_of_range("--host", host, f"an address or name of this machine ({err})")) from None
+    try:
+        return socket.create_server((host, port), family=family)
+    except OSError as err:
+        raise ConfigError(out_of_range("--port", port, f"a port free on {host} ({err.strerror or err})")) from None
