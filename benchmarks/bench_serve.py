@@ -56,8 +56,7 @@ def timed_step(live: StepwiseWalk) -> dict:
     t3 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
     ready = ReadyStep(k, live.walk.steps[k], table, frames, t3 - t0, False)
-    planned = live._plans[-1]                      # noqa: SLF001
-    json.dumps(step_message(ready, live.body, live.attributes, {"step": planned.index}), allow_nan=False)
+    json.dumps(step_message(ready, live.body, live.attributes, {"step": live.last_planned.index}), allow_nan=False)
     t4 = time.perf_counter()
     return {"solve": t1 - t0, "frames": t2 - t1, "table": t3 - t2, "message": t4 - t3, "total": t4 - t0,
             "t_step": live.walk.steps[k].plan.timings.t_step}

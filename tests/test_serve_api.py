@@ -125,6 +125,17 @@ def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, t
     assert (tmp_path / "run" / "walk.bvh").read_text(encoding="utf-8") == exported["bvh"]
 
 
+def test_a_step_that_does_not_converge_ends_its_walk_in_one_line_and_a_new_one_walks(client, fail_at_step):
+    fail_at_step(3, "swing2", 1e-3)
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 2)                       # and asks for step 2, whose next step fails
+        failed = receive(ws, "failed")
+        assert "swing2" in failed["message"] and "\n" not in failed["message"]
+        ws.send_text(json.dumps({"type": "start", "settings": {"walk.speed": 4.0}}))
+        assert receive(ws, "skeleton")["type"] == "skeleton"
+        assert receive(ws, "step")["index"] == 0
+
+
 def test_a_new_walk_with_other_settings_replaces_the_old_one(client):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
         walk_steps(ws, 2)

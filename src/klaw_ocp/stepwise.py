@@ -221,8 +221,10 @@ class StepwiseWalk:
                          closing=self._closing_at == k)
 
     @property
-    def steps_planned(self) -> int:
-        return len(self._plans)
+    def last_planned(self):
+        """The plan made last (:class:`~klaw_ocp.gait.StepPlan`): the step the next change can reach
+        is the one after it."""
+        return self._plans[-1]
 
     def reproducing_config(self) -> ExperimentConfig:
         """The experiment that ``klaw-ocp run`` solves into this walk, step for step: the first

@@ -15,6 +15,8 @@ from __future__ import annotations
 import asyncio
 import json
 
+from starlette.websockets import WebSocketDisconnect
+
 from ..config import ExperimentConfig
 from ..errors import ConfigError, ConvergenceError
 from ..result_files.bvh import bvh_text
@@ -117,27 +119,32 @@ class LiveSession:
 
     # -- handing out steps --------------------------------------------------------------------
     async def _hand_out(self) -> None:
-        while True:
-            await self.wake.wait()
-            self.wake.clear()
-            live = self.live
-            while live is not None and live is self.live and self.sent < self.asked:
-                try:
-                    ready = await asyncio.to_thread(live.next_step)
-                except ConvergenceError as err:
-                    live.ended = True
-                    await self.send({"type": "failed", "message": " ".join(str(err).split())})
-                    break
-                if live is not self.live:        # a new walk started meanwhile: drop the old one's step
-                    break
-                if ready is None:       # nothing left (the last step was sent with its "ended")
-                    break
-                self.sent = ready.index
-                planned = live._plans[-1]
-                await self.send(step_message(ready, live.body, live.attributes,
-                                             {"step": planned.index,
-                                              "step_frequency": planned.parameters.step_frequency_spm,
-                                              "speed": planned.parameters.speed_kmh}))
-                if live.ended and self.sent == len(live.walk.steps) - 1:
-                    await self.send({"type": "ended", "steps": len(live.walk.steps)})
-                    break
+        """Solve and send each step the page asks for. A step that fails ends its walk with one
+        line ("failed"); a page gone mid-send ends the task; nothing here ends the server."""
+        try:
+            while True:
+                await self.wake.wait()
+                self.wake.clear()
+                await self._send_asked(self.live)
+        except (WebSocketDisconnect, RuntimeError, OSError):   # the page closed while a step was sent
+            return
+
+    async def _send_asked(self, live) -> None:
+        while live is not None and live is self.live and self.sent < self.asked:
+            try:
+                ready = await asyncio.to_thread(live.next_step)
+            except Exception as err:     # noqa: BLE001 - ConvergenceError, or any fault of one walk
+                live.ended = True
+                words = str(err) if isinstance(err, (ConvergenceError, ConfigError)) else f"{type(err).__name__}: {err}"
+                await self.send({"type": "failed", "message": " ".join(words.split())})
+                return
+            if live is not self.live or ready is None:   # a new walk started meanwhile, or none left
+                return
+            self.sent = ready.index
+            planned = live.last_planned
+            await self.send(step_message(ready, live.body, live.attributes,
+                                         {"step": planned.index, "step_frequency": planned.parameters.step_frequency_spm,
+                                          "speed": planned.parameters.speed_kmh}))
+            if live.ended and self.sent == len(live.walk.steps) - 1:
+                await self.send({"type": "ended", "steps": len(live.walk.steps)})
+                return
