@@ -262,3 +262,20 @@ def test_the_real_server_keeps_serving_through_abuse():
         with connect(ws_url, origin=url, open_timeout=20) as page:
             kinds = [json.loads(page.recv(timeout=30))["type"] for _ in range(2)]
             assert kinds == ["skeleton", "step"]
+
+
+def test_serve_warns_when_asked_to_serve_other_machines(capsys, monkeypatch):
+    """--host other than the loopback: served, with a warning (the server stubbed: it would block)."""
+    import klaw_ocp.serve.server as server_module
+
+    class Stub:
+        started, should_exit, servers = False, True, []
+
+        def run(self, sockets):
+            sockets[0].close()
+
+    monkeypatch.setattr(server_module, "make_server", lambda app, host, port: Stub())
+    assert main(["serve", "--host", "0.0.0.0", "--port", "0"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("klaw-ocp: warning: serving on 0.0.0.0: any machine that reaches it can open walks")
+    assert main(["serve", "--port", "0"]) == 0 and "warning" not in capsys.readouterr().err

@@ -102,6 +102,12 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         assert line == "walk.speed: got 11.5 km/h, allowed 0.5 to 9 km/h (attributes.speed_min/speed_max)"
         walked = len(browser.execute_script("return window.klaw.shown"))
         wait_for(browser, f"return window.klaw.shown.length >= {walked + 1}")
+        # stop at rest, then the downloads: walk.bvh from the page's button
+        browser.find_element("id", "stop").click()
+        wait_for(browser, "return window.klaw.ended", timeout=30)
+        browser.find_element("id", "download-bvh").click()
+        exported = wait_for(browser, "return window.klaw.exported")
+        assert exported["file"] == "bvh" and exported["bvh_chars"] > 10_000 and exported["config_chars"] > 500
         shot = tmp_path / "playground.png"
         browser.save_screenshot(str(shot))
     _not_blank(shot)

@@ -155,6 +155,7 @@ function receive(m) {
   } else if (m.type === "failed") {
     walkEnded = true; showRefusal("message", m.message);
   } else if (m.type === "export") {
+    state.exported = { file: wanted, bvh_chars: m.bvh.length, config_chars: m.config.length };
     if (wanted === "bvh") download("walk.bvh", m.bvh, "text/plain");
     else download(`${m.name}.yaml`, m.config, "application/yaml");
   }
