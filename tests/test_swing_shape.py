@@ -77,7 +77,9 @@ def test_the_thigh_holds_in_swing2(walk):
         # ground (a closing step's short swing)
         target = step.plan.constraints.theta3 + s2.parameters["hip_actuator"]
         assert theta3.min() >= target - 1e-6, step.index               # never past it forward
-        assert theta3.max() - target <= math.radians(8), step.index
+        # the drift back is measured from where swing1 left the thigh: with the recovery
+        # actuator (a first step from rest) the held angle itself moved forward
+        assert theta3.max() - theta3[0] <= math.radians(8), step.index
 
 
 def test_the_knee_arrives_straight_at_rest_and_locks_without_an_impact(walk):
