@@ -45,9 +45,8 @@ def test_the_accentuated_list_raises_the_swing_hip_torque(fig9):
     # at 5 deg, 3.8 cm at 12 deg (l0 = 0.18 m)
     assert acc["swing_hip_low_m"] < nat["swing_hip_low_m"] < 0
     assert -acc["swing_hip_low_m"] == pytest.approx(0.181 * 0.2079, rel=0.02)
-    # Measured: the accentuated list raises the peak swing hip torque's magnitude (118 -> 123 N m
-    # on the 1.8 m, 80 kg body, +4.8 %), the natural walk's peak in swing2's hold, the accentuated
-    # one's in swing1. The leg hangs from a hip that sinks further during the swing, yet must reach
+    # Measured: the accentuated list raises the peak swing hip torque's magnitude (115 -> 122 N m
+    # on the 1.8 m, 80 kg body, +5.9 %), both at the end of swing1, braking the thigh. The leg hangs from a hip that sinks further during the swing, yet must reach
     # the same posture, at rest, at t1: swing1 pays for it with a larger fall of its flexion
     # torque (§2.4: the pelvis "might 'force' the dynamic leg to increase its hip torque").
     assert abs(acc["peak_F_theta3_Nm"]) > abs(nat["peak_F_theta3_Nm"]) > 0

@@ -46,8 +46,10 @@ SWING3_SCALE_REL = 0.05
 #: Swing2's recovery (§4.3): where the toe would touch the ground, the thigh's holding target is
 #: moved by steps of this much (rad; negative: the thigh further forward, the hip torque larger).
 SWING2_RECOVERY_STEP = -0.005
-#: swing1's continuation (:meth:`StepController.solve_swing1`): the shares of curve P's end slope
+#: swing1's continuation (:meth:`StepController.solve_swing1`): the shares of curve P's end slope,
+#: and its name among a solve's fallbacks (summary.json, docs/solvers.md)
 SWING1_CONTINUATION = (0.0, 0.5, 1.0)
+CURVE_P_CONTINUATION = "curve-p-continuation"
 
 
 def prepare_kernels(solver, lock_rule: str = choices.DEFAULT_LOCK_RULE) -> None:
@@ -317,6 +319,7 @@ class StepController:
                 stage = replace(stage, guess=np.array([solution.parameters[k] for k in problem.spec.unknown_names]),
                                 state_guess=solution.states)
             solution = self._solve(index, stage, remember=share == 1.0)
+        solution.fallbacks.insert(0, CURVE_P_CONTINUATION)
         return solution
 
     def heel_clearance_min(self, swing3: SubphaseSolution, c: np.ndarray) -> float:

@@ -100,6 +100,7 @@ class CurveP:
     D: float                       # the ankle's travel from toe-off to t1 (m)
     x0: float                      # the toe-off ankle's x (world, m)
     coefficients: np.ndarray       # A_0 .. A_4, highest power first
+    end_slope: float               # y'(D): the knee's extension rate at t1 (curve_p.end_slope_for_knee_rate)
     flat_end: np.ndarray           # the same with the paper's y'(D) = 0, where swing1 starts a
                                    # continuation if it fails on the curve itself
     theta5_toe_off: float
@@ -109,7 +110,7 @@ class CurveP:
 
     def as_dict(self) -> dict:
         return {"a0": self.a0, "a_max": self.a_max, "a_min": self.a_min, "C": self.C, "D": self.D,
-                "x0": self.x0, "coefficients": self.coefficients.tolist(),
+                "x0": self.x0, "coefficients": self.coefficients.tolist(), "end_slope": self.end_slope,
                 "theta5_toe_off": self.theta5_toe_off, "theta6_toe_off": self.theta6_toe_off,
                 "theta5_t1": self.theta5_t1}
 
@@ -213,7 +214,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
     coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel, end_slope)
     swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
                            theta5_hs, theta6_hs, ds.theta5d_toe_off)
-    return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs,
+    return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs, end_slope=end_slope,
                   flat_end=curve_p_coefficients(a0, a_max, a_min, peak, d_travel),
                   theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
                   swing_foot=swing_foot)
