@@ -168,7 +168,7 @@ def swing_context(**values):
     ctx.update(origin_x=0.2, origin_y=BODY.l9, l8=BODY.l8, l9=BODY.l9, l12=BODY.l12, l13=BODY.l13,
                toe_off_time=0.1, swing_end_time=0.6, foot_t_toe_off=0.1, foot_t1=0.35, foot_t2=0.5, foot_t_heel_strike=0.6,
                foot_theta5_toe_off=1.4, foot_theta6_toe_off=0.5, foot_theta5_t1=1.6, foot_theta5_heel_strike=1.57,
-               foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, k_h=80.0, d_h=9.0, theta3_target=-0.3, tau3=0.05,
+               foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, k_h=80.0, d_h=9.0, theta3_target=-0.3, theta3_peak=-0.33, tau3=0.05,
                exp3_mean=0.2, exp4_mean=0.3,
                P0=0.0, P1=0.0, P2=0.0, P3=0.0, P4=0.1, curve_x0=0.0, baumgarte=50.0, swing2_start=0.35, tau4=0.04,
                pelvis_width=0.18, pelvis_rotation_start=0.0, pelvis_rotation_end=0.0, pelvis_list=0.0)
@@ -195,13 +195,13 @@ def test_swing_torques_are_the_paper_shapes():
     a11 = b.I3 + b.I4 + b.m3 * b.r3 ** 2 + b.m4 * (b.l3 ** 2 + b.r4 ** 2 + 2 * b.l3 * b.r4 * math.cos(0.5))
     assert gain(0.1) == pytest.approx(7.0 / a11)
     assert gain(0.15) == pytest.approx(7.0 / 0.8 * (1 / math.e - 0.2) / a11)
-    # swing2: hold spring-damper about theta3_target + actuator; F_theta4 decays from t1 with tau4
+    # swing2: hold spring-damper about the thigh's peak + actuator; F_theta4 decays from t1 with tau4
     s2 = as_function(swing2_torques, 10, 1, 3, nc)
     x2 = np.r_[x1[:6], -0.25, 0.9, 0.4, -3.0]
     f3, f4 = s2(x2, 0.39, [-4.0, -0.02, 1.5], c)
-    assert f3[0] == pytest.approx(80.0 * (-0.3 - 0.02 + 0.25) - 9.0 * 0.4)
+    assert f3[0] == pytest.approx(80.0 * (-0.33 - 0.02 + 0.25) - 9.0 * 0.4)
     assert f4[0] == pytest.approx(1.5 - 4.0 * (1 / math.e - 0.3))
-    # swing3: the same hold (no actuator) plus the constant moment
+    # swing3: the hold about the heel-strike angle (no actuator) plus the constant moment
     s3 = as_function(swing3_torque, 8, 1, 1, nc)
     x3 = np.r_[x1[:6], -0.28, 0.3]
     assert s3(x3, 0.55, [1.5], c)[0][0] == pytest.approx(80.0 * (-0.3 + 0.28) - 9.0 * 0.3 + 1.5)
@@ -209,11 +209,12 @@ def test_swing_torques_are_the_paper_shapes():
 
 # -- curve P ------------------------------------------------------------------------------------
 
-def check_five_conditions(a0, a_max, a_min, c, d):
-    coeffs = ds.curve_p_coefficients(a0, a_max, a_min, c, d)
+def check_five_conditions(a0, a_max, a_min, c, d, end_slope=0.0):
+    coeffs = ds.curve_p_coefficients(a0, a_max, a_min, c, d, end_slope)
     slope = np.polyder(coeffs)
     assert [np.polyval(coeffs, s) for s in (0.0, c, d)] == pytest.approx([a0, a_max, a_min], abs=1e-9)
-    assert [np.polyval(slope, s) for s in (c, d)] == pytest.approx([0.0, 0.0], abs=1e-8 / d)   # flat at C, D
+    # flat at C; at D the paper's flat end or the slope that has the knee extending at t1
+    assert [np.polyval(slope, s) for s in (c, d)] == pytest.approx([0.0, end_slope], abs=1e-8 / d)
 
 
 def test_curve_p_coefficients_by_hand():
@@ -230,6 +231,7 @@ def test_curve_p_coefficients_by_hand():
 @example(a0=0.05, a_min=0.20, rise=0.10, d=1.2, frac=0.7)      # the peak late in the travel
 def test_curve_p_meets_its_five_conditions(a0, a_min, rise, d, frac):
     check_five_conditions(a0, max(a0, a_min) + rise, a_min, frac * d, d)
+    check_five_conditions(a0, max(a0, a_min) + rise, a_min, frac * d, d, end_slope=-0.3)
 
 
 @FAST
@@ -254,10 +256,10 @@ def test_swing1_knee_law_keeps_the_ankle_on_curve_p():
     """theta4's rate makes d/dt (ankle_y - P(ankle_x - x0)) = -baumgarte * (that error)."""
     coeffs = ds.curve_p_coefficients(0.12, 0.17, 0.10, 0.15, 0.5)
     c = swing_context(curve_x0=-0.3, **{f"P{i}": v for i, v in enumerate(coeffs)})
-    rhs = as_function(swing1_rhs, 9, 1, 1, len(SWING_CONTEXT))
+    rhs = as_function(swing1_rhs, 9, 1, 2, len(SWING_CONTEXT))
     x = np.array([0.86, 0.1, 0.02, 0.05, 1.2, -0.1, 0.25, 0.6, -2.0])
     w, th1, _, wd, th1d, _, th3, th4, th3d = x
-    xdot = rhs(x, 0.2, [5.0], c)[0]
+    xdot = rhs(x, 0.2, [5.0, 1.0], c)[0]
     assert xdot[6] == th3d and list(xdot[:3]) == list(x[3:6])   # rates carried through
     th4d = xdot[7]
     hip = np.array([0.2, BODY.l9]) + w * unit(th1)
@@ -270,6 +272,31 @@ def test_swing1_knee_law_keeps_the_ankle_on_curve_p():
     assert abs(error) > 1e-3                    # the test state is off the curve: the correction acts
     error_rate = ankle_vel[1] - np.polyval(np.polyder(coeffs), s) * ankle_vel[0]
     assert error_rate == pytest.approx(-50.0 * error, rel=1e-9)
+
+
+@pytest.mark.parametrize("theta3, theta4, hip_vel, rate", [(-0.41, 0.92, (1.34, 0.08), -5.2),
+                                                          (-0.25, 0.80, (0.25, 0.03), -1.0),
+                                                          (-0.45, 0.95, (2.0, -0.1), 0.0)])
+def test_curve_p_s_end_slope_gives_the_knee_its_rate_at_t1(theta3, theta4, hip_vel, rate):
+    """At t1 the thigh is at rest: with curve P's slope at D from end_slope_for_knee_rate and the
+    ankle at D on the curve, swing1's knee law (the ankle kept on the curve) turns the knee at the
+    asked rate (issue #36: the knee extending at t1, not at rest as with the paper's y'(D) = 0)."""
+    hip = np.array([0.0, 0.93])
+    ankle = hip - BODY.l3 * unit(theta3) - BODY.l4 * unit(theta3 + theta4)
+    slope = ds.end_slope_for_knee_rate(BODY, theta3 + theta4, np.array(hip_vel), rate)
+    assert slope >= -ds.END_SLOPE_SHARE * math.tan(theta3 + theta4)      # not capped in these cases
+    d = 0.6
+    coeffs = ds.curve_p_coefficients(0.2, 0.25, float(ankle[1]), 0.3 * d, d, slope)
+    x0 = float(ankle[0]) - d
+    # the stance state with the hip there moving at hip_vel (w along the leg, theta1 from vertical)
+    th1 = math.atan2(hip[0] - 0.2, hip[1] - BODY.l9)
+    w = math.hypot(hip[0] - 0.2, hip[1] - BODY.l9)
+    # hip_vel = wd unit(th1) + w th1d (cos th1, -sin th1)
+    wd, th1d = np.linalg.solve(np.column_stack([unit(th1), w * np.array([math.cos(th1), -math.sin(th1)])]), hip_vel)
+    c = swing_context(curve_x0=x0, **{f"P{i}": v for i, v in enumerate(coeffs)})
+    rhs = as_function(swing1_rhs, 9, 1, 2, len(SWING_CONTEXT))
+    x = np.array([w, th1, 0.0, wd, th1d, 0.0, theta3, theta4, 0.0])
+    assert rhs(x, 0.2, [0.0, 0.0], c)[0][7] == pytest.approx(rate, abs=1e-9)
 
 
 # -- swing1 end posture ------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 """``klaw-ocp sweep``: --vary parsing, validation before any walk, the files, failures, executors."""
 import csv
 import math
+import re
 
 import pytest
 import yaml
@@ -252,9 +253,15 @@ def test_fallbacks_column_reads_the_summary(monkeypatch):
         summary["steps"][1]["subphases"][2]["fallbacks"] = ["ipopt", "smaller-step"]
         return summary
 
+    own = sweep.run_walk(SHORT, "plain-shooting")["fallbacks"]   # what the walk itself needed
     monkeypatch.setattr(results, "walk_summary", with_fallbacks)
     row = sweep.run_walk(SHORT, "plain-shooting")
-    assert row["status"] == "ok" and row["fallbacks"] == "step1.swing2:ipopt;step1.swing2:smaller-step"
+    injected = "step1.swing2:ipopt;step1.swing2:smaller-step"
+    # the injected list replaces step 1's swing2 entries; the walk's other fallbacks stay
+    kept = [f for f in own.split(";") if f and not f.startswith("step1.swing2:")]
+    assert row["status"] == "ok" and injected in row["fallbacks"]
+    assert sorted(row["fallbacks"].split(";")) == sorted(kept + injected.split(";"))
+    assert all(re.fullmatch(r"step\d+\.(stance|swing[123]):[a-z-]+", f) for f in row["fallbacks"].split(";"))
 
 
 def test_map_with_three_paths_and_categories(tmp_path, monkeypatch):

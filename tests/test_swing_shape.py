@@ -77,7 +77,9 @@ def test_the_thigh_holds_in_swing2(walk):
         # ground (a closing step's short swing)
         target = step.plan.constraints.theta3 + s2.parameters["hip_actuator"]
         assert theta3.min() >= target - 1e-6, step.index               # never past it forward
-        assert theta3.max() - target <= math.radians(8), step.index
+        # the drift back is measured from where swing1 left the thigh: with the recovery
+        # actuator (a first step from rest) the held angle itself moved forward
+        assert theta3.max() - theta3[0] <= math.radians(8), step.index
 
 
 def test_the_knee_arrives_straight_at_rest_and_locks_without_an_impact(walk):
@@ -104,3 +106,40 @@ def test_the_knee_extends_softly(walk):
         last = s2.t >= s2.t[0] + 0.8 * (s2.t[-1] - s2.t[0])
         rates = np.abs(s2.states[last, 9])
         assert rates[-1] <= RATE_TOL and rates.max() <= math.radians(400), step.index
+
+
+def test_the_knee_is_extending_at_t1_at_the_asked_rate(walk):
+    """Curve P's end slope (control/curve_p.py, end_slope_for_knee_rate) has the knee extending
+    at t1 at ``knee_rate_at_t1`` of swing2's mean rate, where swing2 starts. In a first step from
+    rest curve P ends beyond the toe-under-knee posture (D raised to MIN_CURVE_P_TRAVEL of the
+    travel, docs/paper-map.md), where the slope is not the posture's: the rule is not asked there."""
+    share = walk.spec.attributes.knee_rate_at_t1
+    for step in walk.steps:
+        if step.index == 0 and walk.spec.start_from_rest:
+            continue
+        s2 = step.subphase("swing2")
+        asked = -share * s2.states[0][7] / (s2.t[-1] - s2.t[0])
+        # (the plan takes the hip's velocity from the stance's node at t1, the swing re-simulates
+        # it: they agree to a few 1e-6, 5e-5 in a closing step)
+        assert asked < -1.0 and s2.states[0][9] == pytest.approx(asked, rel=1e-4), step.index
+
+
+def test_swing1_falls_back_on_the_papers_curve_p_where_its_own_fails():
+    """A 1 km/h walk of a 1.5 m, 50 kg body starting mid-stride: multiple shooting's first swing1
+    does not converge from its cold guess on the sloped curve P, and is solved by continuation
+    from the paper's flat-ended curve (control/step.py, solve_swing1); the summary says so, and
+    the solution meets swing1's final conditions on the curve itself."""
+    from klaw_ocp.control.step import CURVE_P_CONTINUATION
+    w = simulate_walk({"name": "slow", "body": {"height": 1.5, "mass": 50},
+                       "walk": {"speed": 1.0, "steps": 2}, "solver": {"method": choices.MULTIPLE_SHOOTING}})
+    assert w.status == "ok", w.message
+    first = w.steps[0].subphase("swing1")
+    assert first.fallbacks[0] == CURVE_P_CONTINUATION
+    assert [s.subphase("swing1").fallbacks for s in w.steps[1:]] == [[]] * (len(w.steps) - 1)
+    theta3, theta3d = first.states[-1][6], first.states[-1][8]
+    assert theta3 == pytest.approx(w.steps[0].plan.constraints.theta3, abs=1e-8) and abs(theta3d) <= RATE_TOL
+    # the knee extends at t1, though slower than asked: at 1 km/h the hip moves the ankle little,
+    # and the curve's slope keeps to END_SLOPE_SHARE of the knee's own direction
+    share = w.spec.attributes.knee_rate_at_t1
+    s2 = w.steps[0].subphase("swing2")
+    assert -share * s2.states[0][7] / (s2.t[-1] - s2.t[0]) < s2.states[0][9] < -0.3

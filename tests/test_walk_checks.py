@@ -214,7 +214,7 @@ def test_the_body_swing_foot_stays_above_the_ground_everywhere():
     """The body's swing foot (turned, and lifted with the ankle by the knee's bend where the
     dynamic leg is too low for any foot: swing_foot_guard.lifted_foot) above the ground on the dense
     grid of every swing subphase of every step of the coarse grid in both modes, first steps from
-    rest and closing steps included, where the dynamic ankle comes up to 25 mm below l9. A step
+    rest and closing steps included, where the dynamic ankle comes up to 30 mm below l9. A step
     whose turned foot clears the ground throughout is not lifted at all."""
     below, steps, lifted = [], {}, 0
     for where, _, body, ankle_y, lowest, lift in _swing_feet():

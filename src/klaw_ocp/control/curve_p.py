@@ -63,14 +63,16 @@ def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -
     return np.array([kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)]), phi
 
 
-def curve_p_coefficients(a0: float, a_max: float, a_min: float, c: float, d: float) -> np.ndarray:
-    """[A0..A4] of y(s) = A0 s^4 + A1 s^3 + A2 s^2 + A3 s + A4 from the five conditions of §4.3."""
+def curve_p_coefficients(a0: float, a_max: float, a_min: float, c: float, d: float,
+                         end_slope: float = 0.0) -> np.ndarray:
+    """[A0..A4] of y(s) = A0 s^4 + A1 s^3 + A2 s^2 + A3 s + A4 from the five conditions of §4.3,
+    with y'(D) = ``end_slope`` (the paper's 0 by default: see :func:`end_slope_for_knee_rate`)."""
     rows = [[0, 0, 0, 0, 1],
             [c ** 4, c ** 3, c ** 2, c, 1],
             [4 * c ** 3, 3 * c ** 2, 2 * c, 1, 0],
             [d ** 4, d ** 3, d ** 2, d, 1],
             [4 * d ** 3, 3 * d ** 2, 2 * d, 1, 0]]
-    return np.linalg.solve(np.array(rows, float), np.array([a0, a_max, 0.0, a_min, 0.0]))
+    return np.linalg.solve(np.array(rows, float), np.array([a0, a_max, 0.0, a_min, end_slope]))
 
 
 def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, theta6: float,
@@ -96,3 +98,26 @@ def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, thet
             theta5 = root(toe_height, theta5_natural, upper, xtol=1e-12)
     ankle, phi = toe_under_knee(body, knee, theta5, theta6)
     return ankle, phi, theta5
+
+
+#: the largest share of the knee's own direction (-tan phi) curve P's slope at D takes (about 0.45
+#: at 5 km/h, near it in slow walks); see :func:`end_slope_for_knee_rate`
+END_SLOPE_SHARE = 0.6
+
+
+def end_slope_for_knee_rate(body: Body, shank_angle: float, hip_vel: np.ndarray, knee_rate: float) -> float:
+    """Curve P's slope at D that has the knee extending at ``knee_rate`` (rad/s, theta4d) at t1.
+
+    At t1 the thigh is at rest (swing1's final condition), so the ankle moves with the hip plus
+    the shank turning about the knee: d(ankle)/dt = hip_vel + l4 theta4d (-cos phi, sin phi), phi
+    the shank's angle behind the vertical. The knee law keeps the ankle on the curve, so the
+    curve's slope there sets the knee's rate. With the paper's y'(D) = 0 the knee arrives at t1
+    almost at rest, and swing2 must extend it from rest to rest in 15 % of the swing: a knee
+    torque near 1 N m/kg whose reaction pushes the held thigh back by 7° and the straight leg's
+    heel into the ground. A person's knee is already extending at 250-350°/s there."""
+    vx = float(hip_vel[0]) - body.l4 * math.cos(shank_angle) * knee_rate
+    vy = float(hip_vel[1]) + body.l4 * math.sin(shank_angle) * knee_rate
+    # The knee alone moves the ankle along -tan(phi); as the curve's slope nears it (slow walks,
+    # where the hip's share of the ankle's speed is small) the knee law's d(constraint)/d(theta4)
+    # vanishes and swing1 has no solution nearby: the slope keeps at most END_SLOPE_SHARE of it.
+    return max(vy / vx, -END_SLOPE_SHARE * math.tan(shank_angle))

@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,8 +28,8 @@ from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
-from .step_stages import (DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
-                          step_pelvis, swing_context)
+from .step_stages import (CurveP, DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
+                          step_pelvis, swing_context, with_curve_p)
 from .swing_spec import swing_specs
 
 #: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
@@ -46,6 +46,10 @@ SWING3_SCALE_REL = 0.05
 #: Swing2's recovery (§4.3): where the toe would touch the ground, the thigh's holding target is
 #: moved by steps of this much (rad; negative: the thigh further forward, the hip torque larger).
 SWING2_RECOVERY_STEP = -0.005
+#: swing1's continuation (:meth:`StepController.solve_swing1`): the shares of curve P's end slope,
+#: and its name among a solve's fallbacks (summary.json, docs/solvers.md)
+SWING1_CONTINUATION = (0.0, 0.5, 1.0)
+CURVE_P_CONTINUATION = "curve-p-continuation"
 
 
 def prepare_kernels(solver, lock_rule: str = choices.DEFAULT_LOCK_RULE) -> None:
@@ -240,11 +244,12 @@ class StepController:
         other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
         ds = hind_leg_double_support(self.attrs, plan, stance, other_hips, other_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
-        curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_at(stance.t, t1)])
+        node_t1 = node_at(stance.t, t1)
+        curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_t1], other_vels[node_t1])
         c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
         x_to = stance.states[node_at(stance.t, t.t_ds)]
         swings = self.solve_swings(plan, index, x_to, ds, c, stance.events if not at_rest else None,
-                                   stance.t[node_at(stance.t, t.t_ds)])
+                                   stance.t[node_at(stance.t, t.t_ds)], curve)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],
                           double_support=ds.as_dict(), curve_p=curve.as_dict(),
@@ -258,7 +263,7 @@ class StepController:
                           stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
-                     stance_events, t_toe_off: float) -> list[SubphaseSolution]:
+                     stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:
         """Swing1 from the toe-off posture, swing2 from swing1's end (the knee's rate from swing1's
         kinematic constraint), swing3 from the knee locked at t2 (eq. 5). ``stance_events``: the
         stance's lock events, None in the closing step (whose stance has none)."""
@@ -272,10 +277,10 @@ class StepController:
         # before ended in. Multiple shooting has no events: its modes are unlocked and unused.
         mode1 = NO_LOCK_EVENTS if stance_events is None else lock_mode(stance_events, t_toe_off)
         c1 = lock_context(c, mode1)
-        s1 = self._solve(index, SubphaseProblem(
+        s1 = self.solve_swing1(index, SubphaseProblem(
             specs["swing1"], np.concatenate([x_to, [ds.theta3_toe_off, ds.theta4_toe_off, ds.theta3d_toe_off]]),
             time_grid(t.t_ds, t1, self.n, [t.t_theta1_off]), c1, self._guess("swing1", 2), self.scales["swing1"],
-            mode=mode1))
+            mode=mode1), curve)
         x_end1 = s1.final_state
         mode2 = lock_mode(s1.events, mode=mode1)
         c2 = lock_context(c, mode2)
@@ -295,6 +300,27 @@ class StepController:
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), lock_context(c, mode3), self._guess("swing3", 1),
             self.scales["swing3"], mode=mode3))
         return [s1, s2, s3]
+
+    def solve_swing1(self, index: int, problem: SubphaseProblem, curve: CurveP) -> SubphaseSolution:
+        """Swing1 on curve P; where that fails from the guess (a first step, a change of speed), by
+        continuation from the paper's curve with y'(D) = 0, whose knee arrives at t1 at rest: its
+        solution starts the curve half-way to the solved one's slope, that one the curve itself.
+        The curve's coefficients are linear in its end slope, so each stage blends the two."""
+        try:
+            return self._solve(index, problem)
+        except ConvergenceError:
+            if np.allclose(curve.coefficients, curve.flat_end, rtol=0.0, atol=1e-12):
+                raise
+        solution = None
+        for share in SWING1_CONTINUATION:
+            blend = curve.flat_end + share * (curve.coefficients - curve.flat_end)
+            stage = replace(problem, context=with_curve_p(problem.context, blend))
+            if solution is not None:
+                stage = replace(stage, guess=np.array([solution.parameters[k] for k in problem.spec.unknown_names]),
+                                state_guess=solution.states)
+            solution = self._solve(index, stage, remember=share == 1.0)
+        solution.fallbacks.insert(0, CURVE_P_CONTINUATION)
+        return solution
 
     def heel_clearance_min(self, swing3: SubphaseSolution, c: np.ndarray) -> float:
         """The heel's lowest height over swing3 before it strikes (all nodes in one call)."""

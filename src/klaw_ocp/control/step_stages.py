@@ -33,7 +33,7 @@ from ..kinematics.pelvis import PelvisSchedule
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot
 from ..kinematics.pitch_rules import REACH_FRACTION
 from ..kinematics.virtual_leg import StanceFoot, toe_off_pitch
-from .curve_p import curve_p_coefficients, swing1_end_posture
+from .curve_p import curve_p_coefficients, end_slope_for_knee_rate, swing1_end_posture
 from .stance_law import STANCE_PARAMETERS
 from .swing_law import FOOT_CONTEXT, SWING_CONTEXT
 from .torques import exponential_mean
@@ -100,6 +100,9 @@ class CurveP:
     D: float                       # the ankle's travel from toe-off to t1 (m)
     x0: float                      # the toe-off ankle's x (world, m)
     coefficients: np.ndarray       # A_0 .. A_4, highest power first
+    end_slope: float               # y'(D): the knee's extension rate at t1 (curve_p.end_slope_for_knee_rate)
+    flat_end: np.ndarray           # the same with the paper's y'(D) = 0, where swing1 starts a
+                                   # continuation if it fails on the curve itself
     theta5_toe_off: float
     theta6_toe_off: float
     theta5_t1: float               # the ankle angle at t1 (its heel-strike value, or more dorsiflexed)
@@ -107,7 +110,7 @@ class CurveP:
 
     def as_dict(self) -> dict:
         return {"a0": self.a0, "a_max": self.a_max, "a_min": self.a_min, "C": self.C, "D": self.D,
-                "x0": self.x0, "coefficients": self.coefficients.tolist(),
+                "x0": self.x0, "coefficients": self.coefficients.tolist(), "end_slope": self.end_slope,
                 "theta5_toe_off": self.theta5_toe_off, "theta6_toe_off": self.theta6_toe_off,
                 "theta5_t1": self.theta5_t1}
 
@@ -182,15 +185,22 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
                          samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]))
 
 
-def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray) -> CurveP:
+def thigh_peak(attrs, constraints) -> float:
+    """θ3 at t1, where swing1 brings the thigh to rest and swing2 holds it: ahead of its
+    heel-strike angle (eq. 3; θ3 < 0 ahead of the hip) by ``terminal_swing_retraction``."""
+    return constraints.theta3 - math.radians(attrs.terminal_swing_retraction)
+
+
+def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray, hip_vel_t1: np.ndarray) -> CurveP:
     """Curve P from the toe-off ankle to the ankle with the toe under the knee at t1, the thigh at
-    its heel-strike angle θ3 (eq. 3); the foot reaches its heel-strike angles by t1, dorsiflexing
+    its peak (:func:`thigh_peak`); the foot reaches its heel-strike angles by t1, dorsiflexing
     further if the toe needs it."""
     b, a, t, con = body, attrs, plan.timings, plan.constraints
     t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
     theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
-    knee_t1 = hip_t1 - b.l3 * np.array([math.sin(con.theta3), math.cos(con.theta3)])
-    ankle_t1, _, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs,
+    thigh_t1 = thigh_peak(a, con)
+    knee_t1 = hip_t1 - b.l3 * np.array([math.sin(thigh_t1), math.cos(thigh_t1)])
+    ankle_t1, shank_t1, theta5_t1 = swing1_end_posture(b, knee_t1, theta5_hs, theta6_hs,
                                                 a.toe_clearance + TOE_MARGIN_AT_T1_REL * b.l1)
     a0, x0 = ds.ankle_toe_off[1], ds.ankle_toe_off[0]
     a_min = ankle_t1[1]
@@ -198,12 +208,27 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray)
     a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                 max(a0, a_min) + max(CURVE_P_PEAK_MARGIN_REL * b.l1, CURVE_P_PEAK_MARGIN_TRAVEL * d_travel))
     peak = a.swing_peak_position * d_travel
-    coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel)
+    knee_t1_angle = shank_t1 - thigh_t1
+    knee_rate = -a.knee_rate_at_t1 * knee_t1_angle / (t2 - t1)
+    end_slope = end_slope_for_knee_rate(b, shank_t1, hip_vel_t1, knee_rate)
+    coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel, end_slope)
     swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
                            theta5_hs, theta6_hs, ds.theta5d_toe_off)
-    return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs,
+    return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs, end_slope=end_slope,
+                  flat_end=curve_p_coefficients(a0, a_max, a_min, peak, d_travel),
                   theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
                   swing_foot=swing_foot)
+
+
+#: the curve P entries of the swing context
+_CURVE_P_ENTRIES = [SWING_CONTEXT.names.index(f"P{i}") for i in range(5)]
+
+
+def with_curve_p(c: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
+    """The swing context ``c`` with curve P's coefficients replaced."""
+    c = np.array(c, float)
+    c[_CURVE_P_ENTRIES] = coefficients
+    return c
 
 
 def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_parameters: dict,
@@ -219,7 +244,7 @@ def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_p
     ctx.update(origin_x=origin[0], origin_y=origin[1],
                l8=b.l8, l9=b.l9, l12=b.l12, l13=b.l13, toe_off_time=t_to, swing_end_time=t.t_step,
                **{key: getattr(curve.swing_foot, name) for key, name in zip(FOOT_CONTEXT, SCHEDULE_FIELDS)},
-               k_h=gains.k_h, d_h=gains.d_h, theta3_target=con.theta3,
+               k_h=gains.k_h, d_h=gains.d_h, theta3_target=con.theta3, theta3_peak=thigh_peak(a, con),
                tau3=tau3, exp3_mean=exponential_mean(t1 - t_to, tau3), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
                swing2_start=t1, tau4=tau4, exp4_mean=exponential_mean(t2 - t1, tau4), pelvis_width=pelvis.width,
                pelvis_rotation_start=pelvis.rotation_start, pelvis_rotation_end=pelvis.rotation_end,

@@ -48,7 +48,7 @@ SWING_CONTEXT = VectorLayout(
     STANCE_PARAMETERS_IN_SWING,
     ["origin_x", "origin_y", "l8", "l9", "l12", "l13",
      "toe_off_time", "swing_end_time", *FOOT_CONTEXT,
-     "k_h", "d_h", "theta3_target", "tau3", "exp3_mean", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
+     "k_h", "d_h", "theta3_target", "theta3_peak", "tau3", "exp3_mean", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
      "swing2_start", "tau4", "exp4_mean", "pelvis_width", "pelvis_rotation_start", "pelvis_rotation_end",
      "pelvis_list"],
 )
@@ -130,15 +130,15 @@ def swing1_forces(x, t, u, c):
     return ca.vertcat(stance_f, swing1_torque(t, u, c), 0)
 
 
-def _hold(th3, th3d, c, actuator=0):
+def _hold(th3, th3d, c, target, actuator=0):
     n = names(c)
-    return spring_damper(th3, th3d, n.k_h, n.d_h, n.theta3_target, actuator)
+    return spring_damper(th3, th3d, n.k_h, n.d_h, target, actuator)
 
 
 def swing2_torques(x, t, u, c):
     n = names(c)
     """F_theta3 (the hold, shifted by the recovery actuator u[1]) and F_theta4, u = (fall, actuator, mean)."""
-    return _hold(x[6], x[8], c, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
+    return _hold(x[6], x[8], c, n.theta3_peak, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 
 def swing2_rhs(x, t, u, c):
@@ -163,7 +163,7 @@ def swing2_clearance(x, t, u, c):
 
 
 def swing3_torque(x, t, u, c):
-    return _hold(x[6], x[7], c) + u[0]
+    return _hold(x[6], x[7], c, names(c).theta3_target) + u[0]
 
 
 def swing3_rhs(x, t, u, c):

@@ -56,12 +56,13 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
 def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
     """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
     theta3_error = lambda x, c: x[6] - law.names(c).theta3_target
+    peak_error = lambda x, c: x[6] - law.names(c).theta3_peak
     # the thigh at its target and at rest at t1 (x[8] = theta3d); the knee straight and at rest at
     # t2 (x[7], x[9]). Plain shooting pairs each mean with the rate, each fall with the position
     # (control/torques.py: decaying_exponential_about_mean).
     return {
         "swing1": _spec("swing1", law.SWING1_STATE, SWING1_UNKNOWNS, law.swing1_rhs, law.swing1_forces,
-                        lambda x, c: ca.vertcat(theta3_error(x, c), x[8]), lock_rule=lock_rule,
+                        lambda x, c: ca.vertcat(peak_error(x, c), x[8]), lock_rule=lock_rule,
                         pairing=((1, 1), (0, 0))),
         "swing2": _spec("swing2", law.SWING2_STATE, SWING2_UNKNOWNS, law.swing2_rhs, law.swing2_forces,
                         lambda x, c: ca.vertcat(x[7], x[9]), law.swing2_clearance, SWING2_PATH, lock_rule,

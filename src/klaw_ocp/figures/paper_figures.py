@@ -246,7 +246,7 @@ def fig9_figure(runs, step: int, labels):
     ax_f.set_ylabel("swing hip torque F_θ3 (N m)")
     ax_f.set_title(f"the swing hip torque over step {step}'s swing (§2.4: the lowered hip \"might 'force' the\n"
                    "dynamic leg to increase its hip torque to avoid stubbing its toe\")", fontsize=FONT_PT + 1, pad=16)
-    ax_f.legend(fontsize=FONT_PT, loc="upper left")
+    ax_f.legend(fontsize=FONT_PT, loc="lower right")
     ax_h.set_ylabel("swing hip − stance hip (cm)")
     ax_h.set_xlabel("time from toe-off (s); dotted: the ends of swing1 and swing2")
     ax_h.legend(fontsize=FONT_PT, loc="lower right")

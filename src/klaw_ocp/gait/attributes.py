@@ -133,6 +133,17 @@ _SPECS = [
           "§4.3: swing2 knee torque 'is a decaying exponential function'; time constant as a "
           "fraction of the swing2 duration (with the knee at rest at t2, a slow decay lets it "
           "extend softly), " + _OURS),
+    _spec("swing", "knee_rate_at_t1", "1", 0.65, 0.0, 1.8,
+          "§4.3 curve P: the knee's extension rate at t1, set by curve P's slope at D, as a "
+          "fraction of the mean rate swing2 extends it at (the paper's slope 0 leaves swing2 a "
+          "rest-to-rest extension, its knee torque's reaction pushing the held thigh back; 0.65 "
+          "is 230 deg/s at 5 km/h, where people's knee extends at 250-350 deg/s; at 2 swing2 "
+          "would only brake), " + _OURS),
+    _spec("swing", "terminal_swing_retraction", "deg", 0.0, 0.0, 15.0,
+          "§4.3: the hip angle 'reaches a maximum' at t1 and holds in swing2; how far that peak is "
+          "ahead of the heel-strike angle (eq. 3), which swing3 retracts to, as people's thighs "
+          "do in terminal swing (the heel higher in swing2 and swing3, at about 0.15 N m/kg more "
+          "peak hip torque per degree at 5 km/h), " + _OURS),
     _spec("swing", "hip_hold_frequency", "Hz", 1.5, 0.1, 20.0,
           "§4.3 swing2: hip torque 'a spring and damping model to hold the thigh in place'; "
           "natural frequency " + _OURS),

@@ -334,8 +334,10 @@ def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True,
                       t_ds: float = 0.1) -> StanceFoot:
     """The hind foot of a walk's first step, with no stance behind it; the first step's double
     support lasts ``t_ds`` (s). From rest it stands flat with its leg straight until the double
-    support, whose knee schedule then flexes it from straight (no floor, no blend: s² starts at
-    rest) to its toe-off flexion. In a walking start (``from_rest`` False) the walk begins
+    support, where its heel rises as the hip moves over it and its knee bends only as far as that
+    needs (no scheduled flexion: with the walking toe-off flexion, 40°, the first swing1 starts
+    with the knee bent and the thigh far behind, and multiple shooting found no swing1 that
+    brings the thigh to rest at t1 from there, in 4 of 13 first steps from rest). In a walking start (``from_rest`` False) the walk begins
     mid-stride: the leg has had its single support, its knee on the schedule of a walk of cycle
     ``t_cycle`` (s), its heel up where that needs it."""
     foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0, t_ds), t_heel_off=0.0)
