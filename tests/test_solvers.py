@@ -139,12 +139,15 @@ def test_stance_grids_from_2_kmh_up_are_the_uniform_ones_bit_for_bit(height):
 @pytest.mark.parametrize("height, speed", [(1.4, 1.0), (1.8, 0.5), (2.1, 0.5), (2.1, 1.5)])
 def test_slow_stances_start_dense_after_heel_strike(height, speed):
     """30, 60, 100, 150 and 200 ms after heel strike (control/step.py's STANCE_IMPACT_NODES), then
-    the rest, on average at most 4/3 of the uniform interval; a grid of 10 intervals, whose other
-    5 would be twice as long as uniform, stays uniform."""
+    intervals up to the F_theta1 switch (0.4 t_step) at most 4/3 of the uniform interval, and after
+    it on average at most 4/3 of it; a grid of 10 intervals, too few for that, stays uniform."""
     from klaw_ocp.control.step import GRADED_STANCE_STRETCH
     graded, uniform = _stance_grid_of(height, speed)
+    t_step, h = uniform[-1], uniform[-1] / 20
     assert graded[1:6] == pytest.approx([0.03, 0.06, 0.10, 0.15, 0.20], abs=1e-15)
-    assert (graded[-1] - graded[5]) / 15 <= GRADED_STANCE_STRETCH * uniform[-1] / 20
+    switch = int(np.flatnonzero(graded == uniform[8])[0])      # the uniform grid's node 8 is 0.4 t_step
+    assert np.diff(graded[5:switch + 1]).max() <= GRADED_STANCE_STRETCH * h
+    assert (t_step - graded[switch]) / (20 - switch) <= GRADED_STANCE_STRETCH * h
     assert np.isin(uniform, graded).sum() >= 5          # the breakpoints are nodes of both
     few, uniform_few = _stance_grid_of(height, speed, n=10)
     assert few.tobytes() == uniform_few.tobytes()
