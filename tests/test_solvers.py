@@ -166,3 +166,16 @@ def test_the_initial_guess_keeps_its_jacobian_for_the_next_solve():
     assert kept.success and fresh.success and kept.residual < 1e-9
     for key in fresh.parameters:
         assert kept.parameters[key] == pytest.approx(fresh.parameters[key], rel=1e-8, abs=1e-9)
+
+
+def test_a_kept_singular_jacobian_is_renewed_not_given_up_on():
+    """Newton keeps its last Jacobian for the next solve (chord steps); one that is singular at the
+    new start says nothing of it, so Newton renews it there instead of giving up (a walk's swing1
+    failed so, at 1 km/h, where a fresh solver solved the same problem)."""
+    from dataclasses import replace
+    solver = make_solver("multiple-shooting")
+    assert solver.solve(stance_problem()).success
+    for newton in solver._newton.values():
+        newton._last = {free: replace(lin, M_inv=None) for free, lin in newton._last.items()}
+    again = solver.solve(stance_problem(speed_factor=1.35))
+    assert again.success and again.fallbacks == [] and again.iterations > 0
