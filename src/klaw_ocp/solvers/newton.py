@@ -24,8 +24,9 @@ Chord steps: a solve first checks the residual of its start point (often already
 the simulation of the previous step's parameters), then steps with the last Jacobian it has,
 possibly the previous step's, and evaluates a new one only when the residual does not contract
 by ``CONTRACTION`` per step. A chord step that makes things worse is undone and taken again with
-a fresh Jacobian, as is one that a kept Jacobian, singular at this point, cannot give; a step with a fresh Jacobian backtracks until |residual|_2 decreases (as
-CasADi's Newton rootfinder does). Converged solutions satisfy the same tolerance (max |residual|)
+a fresh Jacobian, as is one that a kept Jacobian, singular at this point, cannot give; a step
+with a fresh Jacobian backtracks until |residual|_2 decreases (as CasADi's Newton rootfinder
+does). Converged solutions satisfy the same tolerance (max |residual|)
 as plain Newton's.
 """
 from __future__ import annotations
