@@ -102,6 +102,57 @@ def test_time_grid_is_the_linspace_of_each_segment_bit_for_bit(t0, t1, n, breakp
     np.testing.assert_array_max_ulp(grid, expected, maxulp=1)      # numpy's linspace, to its last bit's rounding
 
 
+def test_lead_nodes_start_the_grid_and_the_rest_is_the_plain_grid_of_what_is_left():
+    grid = time_grid(0.0, 2.0, 20, [0.8, 0.9, 1.5], lead=(0.01, 0.05, 0.1))
+    assert grid.size == 21 and grid[0] == 0.0 and grid[-1] == 2.0
+    assert grid[1:4].tolist() == [0.02, 0.1, 0.2]
+    assert grid[3:].tolist() == time_grid(0.2, 2.0, 17, [0.8, 0.9, 1.5]).tolist()
+    assert time_grid(0.0, 2.0, 20, [0.8], lead=()).tolist() == time_grid(0.0, 2.0, 20, [0.8]).tolist()
+
+
+@pytest.mark.parametrize("lead, breakpoints, n", [
+    ((0.2, 0.1), [], 20), ((0.0, 0.1), [], 20), ((0.5, 1.0), [], 20),   # not increasing inside (0, 1)
+    ((0.1, 0.3), [0.5], 20),                                              # a breakpoint among them
+    ((0.1, 0.2, 0.3), [], 3)])                                            # no interval left for the rest
+def test_lead_nodes_that_cannot_make_a_grid_are_refused(lead, breakpoints, n):
+    with pytest.raises(ValueError):
+        time_grid(0.0, 2.0, n, breakpoints, lead=lead)
+
+
+def _stance_grid_of(body_height, speed_kmh, n=20):
+    from klaw_ocp.control.step import StepController, stance_grid
+    from klaw_ocp.gait import complete_parameters
+    attrs = LocomotionAttributes.defaults()
+    timings = state_phase_timings(complete_parameters(Body(body_height, 80), speed_kmh=speed_kmh).step_frequency_spm,
+                                  attrs)
+    breakpoints = StepController._breakpoints(type("Plan", (), {"timings": timings})())
+    return stance_grid(timings.t_step, n, breakpoints), time_grid(0.0, timings.t_step, n, breakpoints)
+
+
+@pytest.mark.parametrize("height", [1.4, 1.8, 2.1])
+def test_stance_grids_from_2_kmh_up_are_the_uniform_ones_bit_for_bit(height):
+    for speed in np.arange(2.0, 9.01, 0.25):
+        graded, uniform = _stance_grid_of(height, speed)
+        assert graded.tobytes() == uniform.tobytes(), speed
+
+
+@pytest.mark.parametrize("height, speed", [(1.4, 1.0), (1.8, 0.5), (2.1, 0.5), (2.1, 1.5)])
+def test_slow_stances_start_dense_after_heel_strike(height, speed):
+    """30, 60, 100, 150 and 200 ms after heel strike (control/step.py's STANCE_IMPACT_NODES), then
+    intervals up to the F_theta1 switch (0.4 t_step) at most 4/3 of the uniform interval, and after
+    it on average at most 4/3 of it; a grid of 10 intervals, too few for that, stays uniform."""
+    from klaw_ocp.control.step import GRADED_STANCE_STRETCH
+    graded, uniform = _stance_grid_of(height, speed)
+    t_step, h = uniform[-1], uniform[-1] / 20
+    assert graded[1:6] == pytest.approx([0.03, 0.06, 0.10, 0.15, 0.20], abs=1e-15)
+    switch = int(np.flatnonzero(graded == uniform[8])[0])      # the uniform grid's node 8 is 0.4 t_step
+    assert np.diff(graded[5:switch + 1]).max() <= GRADED_STANCE_STRETCH * h
+    assert (t_step - graded[switch]) / (20 - switch) <= GRADED_STANCE_STRETCH * h
+    assert np.isin(uniform, graded).sum() >= 5          # the breakpoints are nodes of both
+    few, uniform_few = _stance_grid_of(height, speed, n=10)
+    assert few.tobytes() == uniform_few.tobytes()
+
+
 def test_the_initial_guess_keeps_its_jacobian_for_the_next_solve():
     """The single-shooting steps of a cold guess keep their finite-difference Jacobian (as Newton
     keeps its own): a second problem of the subphase (here the periodic start's next trial speed)
@@ -115,3 +166,16 @@ def test_the_initial_guess_keeps_its_jacobian_for_the_next_solve():
     assert kept.success and fresh.success and kept.residual < 1e-9
     for key in fresh.parameters:
         assert kept.parameters[key] == pytest.approx(fresh.parameters[key], rel=1e-8, abs=1e-9)
+
+
+def test_a_kept_singular_jacobian_is_renewed_not_given_up_on():
+    """Newton keeps its last Jacobian for the next solve (chord steps); one that is singular at the
+    new start says nothing of it, so Newton renews it there instead of giving up (a walk's swing1
+    failed so, at 1 km/h, where a fresh solver solved the same problem)."""
+    from dataclasses import replace
+    solver = make_solver("multiple-shooting")
+    assert solver.solve(stance_problem()).success
+    for newton in solver._newton.values():
+        newton._last = {free: replace(lin, M_inv=None) for free, lin in newton._last.items()}
+    again = solver.solve(stance_problem(speed_factor=1.35))
+    assert again.success and again.fallbacks == [] and again.iterations > 0

@@ -24,8 +24,9 @@ Chord steps: a solve first checks the residual of its start point (often already
 the simulation of the previous step's parameters), then steps with the last Jacobian it has,
 possibly the previous step's, and evaluates a new one only when the residual does not contract
 by ``CONTRACTION`` per step. A chord step that makes things worse is undone and taken again with
-a fresh Jacobian; a step with a fresh Jacobian backtracks until |residual|_2 decreases (as
-CasADi's Newton rootfinder does). Converged solutions satisfy the same tolerance (max |residual|)
+a fresh Jacobian, as is one that a kept Jacobian, singular at this point, cannot give; a step
+with a fresh Jacobian backtracks until |residual|_2 decreases (as CasADi's Newton rootfinder
+does). Converged solutions satisfy the same tolerance (max |residual|)
 as plain Newton's.
 """
 from __future__ import annotations
@@ -143,7 +144,13 @@ class CondensedNewton:
             try:
                 dX, du = self._step(lin, d, g)
             except (np.linalg.LinAlgError, ValueError):
-                break
+                if fresh:
+                    break
+                # a kept Jacobian singular here (another problem's, or this one's at a point
+                # since left) says nothing of this point: renew it (a walk's swing1 failed
+                # at once with the last swing1's singular one, a fresh solver solving it)
+                lin = None
+                continue
             iterations += 1
             # backtracking on |F|_2 (as CasADi's Newton rootfinder does): a stale Jacobian gets
             # the full step only, a fresh one up to ten halvings

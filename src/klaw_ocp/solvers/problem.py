@@ -182,12 +182,19 @@ class SubphaseSolution:
         return self.states[-1]
 
 
-def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -> np.ndarray:
+def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = (),
+              lead: Sequence[float] = ()) -> np.ndarray:
     """N+1 nodes from t0 to t1 with every breakpoint inside (t0, t1) on a node.
 
     The nodes are distributed over the segments in proportion to their length (at least one
     interval each), so the number of intervals, and hence the compiled solver, never changes.
+    ``lead``: fractions of t1 - t0, increasing in (0, 1), of extra nodes at the start, one interval
+    each (a grid dense where the motion changes fast, such as right after an impact); the other
+    n - len(lead) intervals span the rest as above, a little longer. The breakpoints must lie
+    after the last of them. Without ``lead`` the grid is the one it always was, bit for bit.
     """
+    if lead:
+        return _led_grid(t0, t1, n, breakpoints, lead)
     cuts = sorted(b for b in breakpoints if t0 + 1e-9 < b < t1 - 1e-9)
     edges = [t0, *cuts, t1]
     # Python floats and ints, not numpy arrays of four: the solvers ask for ~90 grids a walk and
@@ -210,6 +217,21 @@ def time_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float] = ()) -
         nodes.extend([j * step + a for j in range(1, k)])
         nodes.append(b)
     return np.array(nodes)
+
+
+def _led_grid(t0: float, t1: float, n: int, breakpoints: Sequence[float], lead: Sequence[float]) -> np.ndarray:
+    """:func:`time_grid` with ``lead`` nodes at its start."""
+    fractions = list(lead)
+    if not all(a < b for a, b in zip([0.0, *fractions], [*fractions, 1.0])):
+        raise ValueError(f"lead fractions must increase strictly inside (0, 1), got {fractions}")
+    starts = [t0 + f * (t1 - t0) for f in fractions]
+    # a breakpoint among the lead nodes would not be a node of the grid
+    early = [b for b in breakpoints if t0 + 1e-9 < b <= starts[-1] + 1e-9]
+    if early:
+        raise ValueError(f"breakpoints {early} fall among the lead nodes, which end at {starts[-1]}")
+    if n <= len(fractions):
+        raise ValueError(f"need more than {len(fractions)} intervals for {len(fractions)} lead nodes, got {n}")
+    return np.concatenate([[t0, *starts[:-1]], time_grid(starts[-1], t1, n - len(fractions), breakpoints)])
 
 
 @built_once
