@@ -10,7 +10,7 @@ larger than the envelope's per-step limits (``max_speed_change_per_step``,
 
 Every step's plan comes from (speed, step length) through eq. 1 (:func:`klaw_ocp.gait.plan.plan_step`),
 so the walk is a schedule with an entry at every step from its first change to its last:
-:meth:`StepwiseWalk.config` writes that schedule, and ``klaw-ocp run`` of it solves the same
+:meth:`StepwiseWalk.reproducing_config` writes that schedule, and ``klaw-ocp run`` of it solves the same
 steps, to the bit.
 
 Each step's body frames (the root and the 56 angles at the walk's fps) are computed when the step

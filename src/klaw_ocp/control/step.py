@@ -341,17 +341,15 @@ class StepController:
     def solve_swing1(self, index: int, problem: SubphaseProblem, curve: CurveP) -> SubphaseSolution:
         """Swing1 on curve P; where that fails from the guess (a first step, a change of speed), by
         continuation from the paper's curve with y'(D) = 0, whose knee arrives at t1 at rest: its
-        solution starts the curve half-way to the solved one's slope, that one the curve itself.
-        The curve's coefficients are linear in its end slope, so each stage blends the two."""
+        solution starts the curve half-way to the solved one's slope, that one the curve itself."""
         try:
             return self._solve(index, problem)
         except ConvergenceError:
-            if np.allclose(curve.coefficients, curve.flat_end, rtol=0.0, atol=1e-12):
+            if curve.end_slope == 0.0:
                 raise
         solution = None
         for share in SWING1_CONTINUATION:
-            blend = curve.flat_end + share * (curve.coefficients - curve.flat_end)
-            stage = replace(problem, context=with_curve_p(problem.context, blend))
+            stage = replace(problem, context=with_curve_p(problem.context, curve.with_end_slope(share)))
             if solution is not None:
                 stage = replace(stage, guess=np.array([solution.parameters[k] for k in problem.spec.unknown_names]),
                                 state_guess=solution.states)

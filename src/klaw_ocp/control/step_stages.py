@@ -101,12 +101,14 @@ class CurveP:
     x0: float                      # the toe-off ankle's x (world, m)
     coefficients: np.ndarray       # A_0 .. A_4, highest power first
     end_slope: float               # y'(D): the knee's extension rate at t1 (curve_p.end_slope_for_knee_rate)
-    flat_end: np.ndarray           # the same with the paper's y'(D) = 0, where swing1 starts a
-                                   # continuation if it fails on the curve itself
     theta5_toe_off: float
     theta6_toe_off: float
     theta5_t1: float               # the ankle angle at t1 (its heel-strike value, or more dorsiflexed)
     swing_foot: SwingFoot
+
+    def with_end_slope(self, share: float) -> np.ndarray:
+        """The coefficients with ``share`` of the end slope (0: the paper's flat end, 1: the curve)."""
+        return curve_p_coefficients(self.a0, self.a_max, self.a_min, self.C, self.D, share * self.end_slope)
 
     def as_dict(self) -> dict:
         return {"a0": self.a0, "a_max": self.a_max, "a_min": self.a_min, "C": self.C, "D": self.D,
@@ -215,7 +217,6 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
     swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
                            theta5_hs, theta6_hs, ds.theta5d_toe_off)
     return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs, end_slope=end_slope,
-                  flat_end=curve_p_coefficients(a0, a_max, a_min, peak, d_travel),
                   theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
                   swing_foot=swing_foot)
 

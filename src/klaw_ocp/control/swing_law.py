@@ -14,14 +14,15 @@ States (stance part first, see :mod:`.stance_law`):
   curve P; theta4's rate comes from differentiating that constraint, with a Baumgarte term that
   keeps the ankle on the curve (ERRATA "Swing1": the paper accepts this inconsistency).
   F_theta3 = a decaying exponential about its mean (ERRATA 7: F_theta3, not F_theta1): two
-  unknowns, so that the thigh reaches its heel-strike angle at t1 at rest, at its peak ("the hip
-  angle reaches a maximum", §4.3).
+  unknowns, so that the thigh reaches its peak at t1 at rest ("the hip angle reaches a maximum",
+  §4.3): the heel-strike angle, or ``terminal_swing_retraction`` ahead of it.
 - swing2: ``[..6.., theta3, theta4, theta3d, theta4d]``. F_theta3 is a spring-damper holding the
-  thigh at its heel-strike angle, shifted by the recovery actuator; F_theta4 a decaying exponential
+  thigh at its peak, shifted by the recovery actuator; F_theta4 a decaying exponential
   about its mean, two unknowns, so that the knee reaches full extension at t2 at rest and
   swing3's lock (eq. 5) is not an impact.
 - swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
-  holding spring-damper plus a small constant moment that brings the heel down in time.
+  spring-damper about the heel-strike angle plus a small constant moment that brings the heel down
+  in time.
 
 The kinematic foot (ankle angle theta5, toe angle theta6) follows the schedule of
 kinematics/swing_foot.py, the same one the body's angles use.
@@ -136,8 +137,9 @@ def _hold(th3, th3d, c, target, actuator=0):
 
 
 def swing2_torques(x, t, u, c):
+    """F_theta3 (the hold at the thigh's peak, shifted by the recovery actuator u[1]) and F_theta4,
+    u = (fall, actuator, mean)."""
     n = names(c)
-    """F_theta3 (the hold, shifted by the recovery actuator u[1]) and F_theta4, u = (fall, actuator, mean)."""
     return _hold(x[6], x[8], c, n.theta3_peak, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 

@@ -1,10 +1,12 @@
 """The three swing subphases as boundary-value problems (section 4.3).
 
 - ``swing1`` (toe-off to 50 % of t_swing): unknowns F_theta3's fall and mean; theta3 reaches its
-  eq. 3 value at t1 with theta3d = 0 ("the hip angle reaches a maximum", §4.3).
+  peak at t1 (its eq. 3 value, or ``terminal_swing_retraction`` ahead of it) with theta3d = 0
+  ("the hip angle reaches a maximum", §4.3).
 - ``swing2`` (to 85 %): unknowns F_theta4's fall and mean and the hip position actuator of the
   recovery loop (held at 0 unless the toe would not clear the ground); the knee reaches full
-  extension (theta4 = 0) at t2 with theta4d = 0, so that swing3's lock is not an impact. Path functions: toe height, kept above the toe-clearance attribute, and
+  extension (theta4 = 0) at t2 with theta4d = 0, so that swing3's lock is not an impact. Path
+  functions: toe height, kept above the toe-clearance attribute, and
   heel height, reported only (no lower bound: the straight leg of short steps cannot keep the
   scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, body_motion/swing_foot_guard.py).
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
@@ -57,7 +59,7 @@ def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
     """``{"swing1": spec, "swing2": spec, "swing3": spec}``, built once per lock rule."""
     theta3_error = lambda x, c: x[6] - law.names(c).theta3_target
     peak_error = lambda x, c: x[6] - law.names(c).theta3_peak
-    # the thigh at its target and at rest at t1 (x[8] = theta3d); the knee straight and at rest at
+    # the thigh at its peak and at rest at t1 (x[8] = theta3d); the knee straight and at rest at
     # t2 (x[7], x[9]). Plain shooting pairs each mean with the rate, each fall with the position
     # (control/torques.py: decaying_exponential_about_mean).
     return {

@@ -337,8 +337,8 @@ def hind_foot_at_rest(body: Body, attrs, ankle_x: float, from_rest: bool = True,
     support, where its heel rises as the hip moves over it and its knee bends only as far as that
     needs (no scheduled flexion: with the walking toe-off flexion, 40°, the first swing1 starts
     with the knee bent and the thigh far behind, and multiple shooting found no swing1 that
-    brings the thigh to rest at t1 from there, in 4 of 13 first steps from rest). In a walking start (``from_rest`` False) the walk begins
-    mid-stride: the leg has had its single support, its knee on the schedule of a walk of cycle
+    brings the thigh to rest at t1 from there, in 4 of 13 first steps from rest). In a walking
+    start (``from_rest`` False) the walk begins mid-stride: the leg has had its single support, its knee on the schedule of a walk of cycle
     ``t_cycle`` (s), its heel up where that needs it."""
     foot = replace(StanceFoot.standing(body, attrs, ankle_x, 0.0, t_ds), t_heel_off=0.0)
     if from_rest:

@@ -150,7 +150,9 @@ class PlainShootingSolver:
         return x, fx, shots
 
     def _solve_free(self, pb: SubphaseProblem, u: np.ndarray):
-        """Gauss-Seidel sweeps of 1-D solves; from a far guess, along a homotopy.
+        """Gauss-Seidel sweeps of 1-D solves; from a far guess, along a homotopy. A subphase with
+        several coupled unknowns whose last solve ended in Broyden's method starts there, from
+        that solve's Jacobian (``_coupled``), and sweeps only if that does not converge.
 
         When the sweeps fail from the guess u0 (a cold start far from the root, e.g. the first
         stance of a slow walk), they are repeated on the shifted problems
@@ -160,7 +162,8 @@ class PlainShootingSolver:
         start = u.copy()
         several = sum(not f for f in pb.fixed) > 1
         if several and pb.spec in self._coupled:
-            self._note("broyden")
+            # the secant method in several unknowns from the last step's Jacobian is this mode's
+            # ordinary way with coupled unknowns once a step has given it one: not a fallback
             u0, residual0, shots0 = self._broyden(pb, start.copy(), self._coupled[pb.spec])
             if np.all(np.isfinite(residual0)) and np.max(np.abs(residual0)) <= self.tolerance:
                 return u0, residual0, shots0
