@@ -161,9 +161,7 @@ class PlainShootingSolver:
         """
         start = u.copy()
         several = sum(not f for f in pb.fixed) > 1
-        if several and pb.spec in self._coupled:
-            # the secant method in several unknowns from the last step's Jacobian is this mode's
-            # ordinary way with coupled unknowns once a step has given it one: not a fallback
+        if several and pb.spec in self._coupled:     # (ordinary here, so not noted as a fallback)
             u0, residual0, shots0 = self._broyden(pb, start.copy(), self._coupled[pb.spec])
             if np.all(np.isfinite(residual0)) and np.max(np.abs(residual0)) <= self.tolerance:
                 return u0, residual0, shots0
