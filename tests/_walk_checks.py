@@ -226,16 +226,18 @@ def swing_body_lift(recorded: RecordedWalk, step):
 
 
 def swing_leg_function(recorded: RecordedWalk, step):
-    """times -> (ankle height, shank angle) of a step's swing leg, linear between the dense samples
-    of swing1, swing2 and swing3 (what the body's foot needs: body_motion.swing_foot_guard.grounded_angles)."""
-    t, ankle_y, shank = [], [], []
+    """times -> (ankle height, shank angle, knee flexion) of a step's swing leg, linear between the
+    dense samples of swing1, swing2 and swing3 (what the body's foot needs:
+    body_motion.swing_foot_guard.grounded_angles)."""
+    t, ankle_y, shank, knee = [], [], [], []
     for name in ("swing1", "swing2", "swing3"):
         dense = recorded.dense(step.index, name)
         t.append(dense.t)
         ankle_y.append(swing_ankle_heights(recorded.body, step.origin_x, name, dense))
-        shank.append(dense.x[:, 6] + (dense.x[:, 7] if name != "swing3" else 0.0))
-    t, ankle_y, shank = (np.concatenate(v) for v in (t, ankle_y, shank))
-    return lambda times: (np.interp(times, t, ankle_y), np.interp(times, t, shank))
+        knee.append(dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t)))
+        shank.append(dense.x[:, 6] + knee[-1])
+    t, ankle_y, shank, knee = (np.concatenate(v) for v in (t, ankle_y, shank, knee))
+    return lambda times: (np.interp(times, t, ankle_y), np.interp(times, t, shank), np.interp(times, t, knee))
 
 
 def eq2_timings(step_frequency_spm: float, swing1_fraction=0.5, swing2_fraction=0.85) -> dict:

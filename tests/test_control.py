@@ -168,7 +168,7 @@ def swing_context(**values):
     ctx.update(origin_x=0.2, origin_y=BODY.l9, l8=BODY.l8, l9=BODY.l9, l12=BODY.l12, l13=BODY.l13,
                toe_off_time=0.1, swing_end_time=0.6, foot_t_toe_off=0.1, foot_t1=0.35, foot_t2=0.5, foot_t_heel_strike=0.6,
                foot_theta5_toe_off=1.4, foot_theta6_toe_off=0.5, foot_theta5_t1=1.6, foot_theta5_heel_strike=1.57,
-               foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, k_h=80.0, d_h=9.0, theta3_target=-0.3, theta3_peak=-0.33, tau3=0.05,
+               foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, foot_theta4_t1=0.9, k_h=80.0, d_h=9.0, theta3_target=-0.3, theta3_peak=-0.33, tau3=0.05,
                exp3_mean=0.2, exp4_mean=0.3,
                P0=0.0, P1=0.0, P2=0.0, P3=0.0, P4=0.1, curve_x0=0.0, baumgarte=50.0, swing2_start=0.35, tau4=0.04,
                pelvis_width=0.18, pelvis_rotation_start=0.0, pelvis_rotation_end=0.0, pelvis_list=0.0)

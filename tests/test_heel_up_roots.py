@@ -1,7 +1,7 @@
 """The heel-up reach pitch (kinematics/heel_up_roots.py) against brute force: the least pitch at
 which the ankle of the heel-up foot, rebuilt here (about the metatarsal head, then through a C1
 band about meta-off, then about the toe tip), is a given distance from the hip, found by a fine
-scan. Also the swing foot's cone envelope in O(n) against its n x n definition."""
+scan. Also the swing foot's smooth turn on a band against its n x n definition."""
 import math
 
 import numpy as np
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import example, given, settings, strategies as st
 
 from klaw_ocp.body import Body
-from klaw_ocp.body_motion.swing_foot_guard import GUARD_RATE, rate_limited_turn
+from klaw_ocp.body_motion.swing_foot_guard import GUARD_ACCELERATION, GUARD_GRID, GUARD_RATE, smooth_turn
 from klaw_ocp.gait.attributes import LocomotionAttributes
 from klaw_ocp.kinematics.heel_up_roots import MAX_PITCH
 from klaw_ocp.kinematics.virtual_leg import StanceFoot
@@ -104,15 +104,37 @@ def test_many_hips_at_once_are_each_hip_alone():
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.floats(-0.3, 0.3), min_size=2, max_size=300), st.integers(0, 2 ** 32 - 1))
-def test_the_rate_limited_turn_is_the_cone_envelope_by_its_definition(shape, seed):
-    """The swing foot's turn away from its schedule (swing_foot_guard.grounded_angles) in O(n) equals
-    its n x n definition: max_j(part_j - rate |t_i - t_j|), capped by the cones from both ends."""
-    grid = 0.1 + 0.002 * np.arange(len(shape))
+def test_the_smooth_turn_is_the_regularisation_by_its_definition(shape, seed):
+    """The swing foot's turn away from its schedule (swing_foot_guard.grounded_angles) in O(n) and
+    on a band equals its n x n definition: for each sign's part, the cone envelope max_j(part_j - R
+    |t_i - t_j|), then its Lasry-Lions regularisation (sup- then inf-convolution with parabolas,
+    λ = 2/A, μ = 1/A), capped by the fastest rise from either end (acceleration A, then rate R).
+    Its rate stays within R; where the caps leave it alone it meets the requirement and its second
+    differences stay within A h² (C1, |θ''| <= A). With escalations (the ankle lift's) it meets
+    more of a requirement of one sign, never less."""
+    grid = 0.1 + GUARD_GRID * np.arange(len(shape))
     required = np.array(shape) * (np.random.default_rng(seed).random(len(shape)) < 0.3)
-    expected = np.zeros(len(grid))
-    ends = GUARD_RATE * np.minimum(grid - grid[0], grid[-1] - grid)
+    a, r = GUARD_ACCELERATION, GUARD_RATE
+    near_end = np.minimum(grid - grid[0], grid[-1] - grid)
+    d = np.abs(grid[:, None] - grid[None, :])
+    cap = np.where(near_end * a < r, 0.5 * a * near_end ** 2, r * near_end - 0.5 * r * r / a)
+    expected, capped = np.zeros(len(grid)), False
     for sign in (1.0, -1.0):
         part = np.maximum(sign * required, 0.0)
-        cone = part[None, :] - GUARD_RATE * np.abs(grid[:, None] - grid[None, :])
-        expected += sign * np.minimum(cone.max(axis=1), ends)
-    np.testing.assert_allclose(rate_limited_turn(grid, required), expected, rtol=0, atol=1e-14)
+        cone = (part[None, :] - r * d).max(axis=1)
+        u = (cone[None, :] - d * d * a / 4).max(axis=1)
+        v = (u[None, :] + d * d * a / 2).min(axis=1)
+        expected += sign * np.minimum(v, cap)
+        capped |= bool(np.any(v > cap))
+    turn = smooth_turn(grid, required)
+    np.testing.assert_allclose(turn, expected, rtol=0, atol=1e-12)
+    assert np.abs(np.diff(turn)).max(initial=0.0) <= r * GUARD_GRID * (1 + 1e-9) + 1e-12
+    one_sign = not (np.any(required > 0) and np.any(required < 0))
+    if not capped and one_sign:
+        assert np.all(np.sign(required) * (turn - required) >= -1e-12)
+    if not capped and len(grid) > 2:
+        assert np.abs(np.diff(turn, 2)).max() <= a * GUARD_GRID ** 2 * (1 + 1e-9) + 1e-12
+    if one_sign:
+        escalated = smooth_turn(grid, required, escalations=4)
+        shortfall = lambda x: np.maximum(np.abs(required) - np.abs(x), 0.0).max(initial=0.0)
+        assert shortfall(escalated) <= shortfall(turn) + 1e-12

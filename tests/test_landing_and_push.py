@@ -137,7 +137,7 @@ def test_the_ground_guard_leaves_a_steep_foot_whose_points_cannot_reach_the_grou
     turn it (it turned such a foot by 5.3° at the first frame of swing)."""
     body = Body(height=1.8, mass=80.0)
     foot = SwingFoot(0.0, 0.2, 0.3, 0.4, math.radians(43.0), math.radians(30.0), math.radians(100.0),
-                     math.radians(90.0), 0.0)
+                     math.radians(90.0), 0.0, 0.0, math.radians(50.0))
     t = np.array([0.0])
     shank = math.radians(42.0)
     theta5, _ = ground_limits(body, foot, t, np.array([0.26]), np.array([shank]))

@@ -79,25 +79,53 @@ def _per_step_clearance(body, step, hips):
 
 
 def test_the_swing_ankle_leaves_toe_off_at_the_stance_rate_and_is_neutral_from_mid_swing():
-    """The schedule (kinematics/swing_foot.py, issue #34): θ5 starts at its toe-off value with the
-    stance ankle's rate (the push-off's plantarflexion runs on), reaches θ5_t1 at t1 at rest, holds
-    it through the first half of swing2, is back at the heel-strike angle by t2 at rest and holds
-    it through swing3; numpy and CasADi give the same numbers."""
+    """The schedule (kinematics/swing_foot.py, issues #34, #36): θ5 starts at its toe-off value
+    with the stance ankle's rate (the push-off's plantarflexion runs on), reaches θ5_t1 at t1 at
+    rest, with zero acceleration (the body's foot is C2 there); the foot swing2's path constrains
+    holds it through the first half of swing2 and is back at the heel-strike angle by t2 at rest;
+    numpy and CasADi give the same numbers."""
     import casadi as ca
 
     from klaw_ocp.kinematics.swing_foot import SCHEDULE_FIELDS, SWING2_HOLD_FRACTION, SwingFoot, schedule_angles
-    foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0)
-    h = 1e-7
+    foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0, 0.9)
+    h = 1e-5
     th5 = lambda t: float(foot.angles(np.array([t]))[0][0])
     rate = lambda t: (th5(t + h) - th5(t - h)) / (2 * h)
-    assert th5(0.1) == pytest.approx(1.40) and (th5(0.1 + h) - th5(0.1)) / h == pytest.approx(-5.0, rel=1e-4)
+    accel = lambda t: (th5(t + h) - 2 * th5(t) + th5(t - h)) / h ** 2
+    assert th5(0.1) == pytest.approx(1.40) and (th5(0.1 + 1e-7) - th5(0.1)) / 1e-7 == pytest.approx(-5.0, rel=1e-4)
     assert min(th5(t) for t in np.linspace(0.1, 0.3, 201)) < 1.40 - 0.05       # plantarflexes on
     assert th5(0.3) == pytest.approx(1.80) and rate(0.3) == pytest.approx(0.0, abs=1e-5)
     hold = 0.3 + SWING2_HOLD_FRACTION * 0.15
     assert th5(hold) == pytest.approx(1.80) and th5(0.45) == pytest.approx(1.5708)
-    assert rate(0.45) == pytest.approx(0.0, abs=1e-5) and th5(0.5) == pytest.approx(1.5708)
+    assert rate(0.45) == pytest.approx(0.0, abs=1e-3) and th5(0.55) == pytest.approx(1.5708)   # (h x its acceleration step)
+    largest = max(abs(accel(t)) for t in np.linspace(0.11, 0.29, 37))
+    assert abs(accel(0.3 - 2e-4)) < 0.02 * largest and abs(accel(0.3 + 2e-4)) < 0.02 * largest
     t = ca.SX.sym("t")
     values = {name: getattr(foot, name) for name in SCHEDULE_FIELDS}
     f = ca.Function("f", [t], [schedule_angles(t, values, lambda x, lo, hi: ca.fmin(ca.fmax(x, lo), hi))[0]])
     for tt in np.linspace(0.1, 0.55, 19):
         assert float(f(tt)) == pytest.approx(th5(tt), abs=1e-14)
+
+
+def test_the_body_s_swing_ankle_relaxes_with_the_knee():
+    """The foot the body shows (kinematics/swing_foot.py): the same swing1, then through swing2 it
+    keeps θ5_t1's dorsiflexion in proportion to the knee's flexion (all of it while the knee is as
+    flexed as at t1, or more), reaching the heel-strike angle as the knee reaches full extension at
+    t2, at rest, and holding it through swing3."""
+    from klaw_ocp.kinematics.swing_foot import SwingFoot
+    knee_t1 = 0.9
+    foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0, knee_t1)
+    # a knee that flexes on a little after t1, then extends to 0 at t2 at rest (as swing2's does)
+    s = lambda t: np.clip((t - 0.3) / 0.15, 0.0, 1.0)
+    knee = lambda t: knee_t1 * (1 + 0.3 * np.sin(np.pi * s(t))) * (1 - s(t)) ** 2 * (1 + 2 * s(t))
+    th5 = lambda t: float(foot.angles(np.array([t]), knee(np.array([t])))[0][0])
+    h = 1e-5
+    rate = lambda t: (th5(t + h) - th5(t - h)) / (2 * h)
+    for t in np.linspace(0.1, 0.3, 9):           # swing1: the constrained foot's
+        assert th5(t) == pytest.approx(float(foot.angles(np.array([t]))[0][0]), abs=1e-15)
+    assert th5(0.33) == pytest.approx(1.80)       # the knee flexing on past its t1 angle: held
+    for t in (0.4, 0.43):                         # relaxing with the knee
+        r = knee(np.array([t]))[0] / knee_t1
+        assert th5(t) == pytest.approx(1.5708 + (1.80 - 1.5708) * r ** 3 * (10 - 15 * r + 6 * r * r), abs=1e-12)
+    assert th5(0.45 - 1e-9) == pytest.approx(1.5708, abs=1e-9) and abs(rate(0.45 - 2 * h)) < 1e-3
+    assert th5(0.5) == pytest.approx(1.5708) and th5(0.55) == pytest.approx(1.5708)

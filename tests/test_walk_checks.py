@@ -196,20 +196,27 @@ def _swing_feet():
                            ankle_y, np.minimum(toe, heel), lift(dense.t))
 
 
+#: how far short of the ground's limits the smooth turn alone may fall where the ankle grazes l9 (m)
+TURN_SHORTFALL = 1e-3
+
+
 def test_the_turned_swing_foot_stays_above_the_ground_wherever_a_foot_fits():
     """Toe tip and heel of the dynamic leg's swing foot as the body turns it (body_motion/
     swing_foot_guard.py: the schedule, turned where it would enter the ground), before any lift, above
     the ground on the dense grid of swing1, swing2 and swing3, in every step of every walk of the
     coarse grid in both modes but first steps from rest and closing steps, wherever the ankle is
     at least l9 up (a flat foot fits there). Between the nodes, where swing2's toe clearance is a
-    constraint, the foot may dip by TOE_DIP_BETWEEN_NODES."""
+    constraint, the foot may dip by TOE_DIP_BETWEEN_NODES; where the ankle grazes l9 the band of
+    angles that fit is narrow and moves as the square root of the ankle's height above l9, faster
+    than the guard's smooth turn follows (GUARD_RATE, GUARD_ACCELERATION), and the foot may dip by
+    TURN_SHORTFALL more, which the ankle's lift takes (the next test: the body's foot everywhere)."""
     below, checked = [], 0
     for where, starting_or_stopping, body, ankle_y, lowest, _ in _swing_feet():
         fits = ankle_y >= body.l9
         if starting_or_stopping or not fits.any():
             continue
         checked += int(fits.sum())
-        if lowest[fits].min() < -TOE_DIP_BETWEEN_NODES:
+        if lowest[fits].min() < -TOE_DIP_BETWEEN_NODES - TURN_SHORTFALL:
             below.append(f"{where}: {1000 * lowest[fits].min():.2f} mm")
     assert checked > 1000 and not below, "\n".join(below)
 

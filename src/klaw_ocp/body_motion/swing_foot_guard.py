@@ -1,5 +1,6 @@
 """The swing foot's ground guard: the foot the body shows after the walk (§4.3's kinematic foot,
-:class:`klaw_ocp.kinematics.swing_foot.SwingFoot`, kept out of the ground), for every step at once.
+:class:`klaw_ocp.kinematics.swing_foot.SwingFoot`, relaxing with the knee in swing2, kept out of
+the ground), for every step at once.
 
 Where the schedule would put the toe or the heel into the ground, the foot the body shows is
 turned, sample by sample, by the least angle that keeps both on or above it
@@ -14,11 +15,11 @@ A step's foot costs about 90 small numpy operations, most of their time numpy's 
 a grid of about 200 points; the walk has one per step, and the body and the summary each ask for
 all of them. So the grids are concatenated (:func:`lifted_feet`, :func:`grounded_feet`): the
 elementwise parts (the schedule, the ground limits, the lowest sole point, the knee's bend) run
-once on the whole, and the two operations that run along a step's grid, the running maxima of the
-rate-limited turn and of the cone envelope, run on one row per step of a padded array (the padding
-is -inf, which a running maximum passes over), so no maximum crosses from one step into the next.
-Only the interpolation from each grid to the step's own times stays a call per step (np.interp).
-:func:`lifted_foot`, :func:`grounded_angles_on_grid`, :func:`rate_limited_turn` and
+once on the whole, and the one operation that runs along a step's grid, the smooth turn's two
+parabola convolutions, runs on one row per step of a padded array (the padding is -inf for the
+maximum and +inf for the minimum, which each passes over), so nothing crosses from one step into
+the next. Only the interpolation from each grid to the step's own times stays a call per step
+(np.interp). :func:`lifted_foot`, :func:`grounded_angles_on_grid`, :func:`smooth_turn` and
 :func:`ankle_lift` are the one-step forms.
 """
 from __future__ import annotations
@@ -30,8 +31,12 @@ import numpy as np
 from ..kinematics.leg_geometry import clamp, knee_flexion_for_reach, reach_for_knee_flexion
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot, schedule_angles
 
-#: the fastest the ground guard turns the ankle away from its schedule (rad/s; people's swing ankle
-#: moves at up to about 200-300°/s) and the grid it is computed on (s)
+#: the largest angular acceleration (rad/s²) of the ground guard's turn away from the schedule
+#: (and of the knee's bend where it lifts the ankle): the turn is C1, so the foot's rate never
+#: jumps; at 100 fps 5000°/s² is a change of rate of 50°/s between frames, where people's smooth
+#: swing ankle and knee reach about 60. Its largest rate (rad/s; people's swing ankle moves at up
+#: to about 200-300°/s), and the grid it is computed on (s).
+GUARD_ACCELERATION = math.radians(5000)
 GUARD_RATE = math.radians(400)
 GUARD_GRID = 0.002
 
@@ -86,7 +91,7 @@ def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
     return np.minimum(np.minimum(heel, toe), metatarsal)
 
 
-def ground_limits(body, foot: SwingFoot, t, ankle_y, shank_angle) -> tuple[np.ndarray, np.ndarray]:
+def ground_limits(body, foot: SwingFoot, t, ankle_y, shank_angle, knee=None) -> tuple[np.ndarray, np.ndarray]:
     """θ5 (rad) of the schedule ``foot`` at times ``t`` clipped to the angles that keep both the
     toe and the heel on or above the ground (in closed form), with the swing leg's ankle height
     ``ankle_y`` and shank angle θ3 + θ4 (each (n,)); and the ground-limit-free schedule's θ6. Of
@@ -94,13 +99,13 @@ def ground_limits(body, foot: SwingFoot, t, ankle_y, shank_angle) -> tuple[np.nd
     (the two ground limits can leave two ranges; this one moves continuously with the leg). Below
     l9 no foot fits, and the sole is level, the least deep."""
     t = np.asarray(t, float)
-    return _ground_clip(body, *foot.angles(t), np.broadcast_to(ankle_y, t.shape),
+    return _ground_clip(body, *foot.angles(t, knee), np.broadcast_to(ankle_y, t.shape),
                         np.broadcast_to(shank_angle, t.shape))
 
 
 class _Grids:
     """Concatenated per-step grids: each step's first and last value broadcast over its points,
-    and running maxima that restart at every step."""
+    and the smooth envelope of each step's part of a sampled function."""
 
     def __init__(self, grids: list):
         self.lengths = np.array([len(g) for g in grids])
@@ -127,30 +132,85 @@ class _Grids:
             return np.maximum.accumulate(padded[:, ::-1], axis=1)[:, ::-1][self.row, self.column]
         return np.maximum.accumulate(padded, axis=1)[self.row, self.column]
 
-    def envelope(self, part, slope):
-        """max_j(part_j - slope |t_i - t_j|) on each step's grid, as the larger of the running maxima
-        from the left and from the right (O(n), not an n x n matrix)."""
+    def cone_envelope(self, part, rate):
+        """max_j(part_j - rate |t_i - t_j|) on each step's grid (the least function at least
+        ``part`` that changes by at most ``rate``), as the larger of the running maxima from the
+        left and from the right (O(n), not an n x n matrix)."""
+        slope = rate * self.since
         left = self.running_max(part + slope) - slope
         right = self.running_max(part - slope, backwards=True) + slope
         return np.maximum(left, right)
 
+    def smooth_envelope(self, part, acceleration):
+        """The Lasry-Lions regularisation (sup- then inf-convolution with parabolas) of ``part``
+        (>= 0) on each step's grid: a C1 function at least ``part`` whose second derivative stays
+        within ± ``acceleration`` (rad/s², one per step), and equal to ``part`` wherever that
+        already is such a function. With λ = 2/acceleration and μ = λ/2:
 
-def _cone_envelope(grids: _Grids, required, rate=GUARD_RATE, capped_at_ends=False):
-    """The least function at least ``required`` where that is positive and at most it where
-    negative that changes by at most ``rate``, on every step's grid: max_j(part_j - rate |t_i -
-    t_j|) for each sign's part (:meth:`_Grids.envelope`); ``capped_at_ends``: also 0 at each
-    grid's ends, rising from them at ``rate`` (:func:`rate_limited_turn`)."""
+            u_i = max_j part_j - (t_i - t_j)² / (2λ),    v_i = min_j u_j + (t_i - t_j)² / (2μ)
+
+        (v >= part as 1/μ > 1/λ; v is semiconcave with constant 1/μ and semiconvex with 1/(λ - μ)).
+        Only points within sqrt(2λ max(part)) of each other can matter, so each pass is a band of
+        the padded rows, not an n x n matrix."""
+        if not np.any(part > 0):
+            return np.zeros(len(self.t))
+        lam = 2.0 / np.asarray(acceleration, float)                                                       # (steps,)
+        spacing = self.duration[self.ends - 1] / np.maximum(self.lengths - 1, 1)      # each step's grid step
+        band = int(math.ceil(math.sqrt(2 * lam.max() * float(part.max())) / spacing.min())) + 1
+        squared = (np.arange(-band, band + 1) * spacing[:, None]) ** 2                 # (steps, 2 band + 1)
+        rows, columns = self.row, self.column + band
+        padded = np.full((self.shape[0], self.shape[1] + 2 * band), -np.inf)
+        padded[rows, columns] = part
+        windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * band + 1, axis=1)
+        u = (windows - (squared / (2 * lam[:, None]))[:, None, :]).max(axis=2)
+        padded = np.full(padded.shape, np.inf)
+        padded[rows, columns] = u[self.row, self.column]
+        windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * band + 1, axis=1)
+        return (windows + (squared / lam[:, None])[:, None, :]).min(axis=2)[self.row, self.column]
+
+
+#: how many times a step's turn may ask for four times the acceleration (GUARD_ACCELERATION up to
+#: 256 times it) where the smooth one, brought to 0 at the swing's ends, cannot meet its
+#: requirement in time (its rate stays within GUARD_RATE): the foot out of the ground first
+GUARD_ESCALATIONS = 4
+
+
+def _smooth_turn(grids: _Grids, required, acceleration=GUARD_ACCELERATION, escalations=GUARD_ESCALATIONS,
+                 final=False):
+    """The least C1 turn with its rate within ± GUARD_RATE and its acceleration within ±
+    ``acceleration`` (about: the regularisation :meth:`_Grids.smooth_envelope` of the cone envelope
+    :meth:`_Grids.cone_envelope`; both keep the other's bound) that is at least ``required`` where
+    that is positive and at most it where negative, on every step's grid, and 0 at each grid's
+    ends with zero rate (the foot leaves and lands as the stance foot has it): capped by the
+    fastest such rise from either end. Where a step's caps keep its turn short of a requirement
+    (one too large to come and go in time: first and closing steps' low legs), that step's
+    acceleration is raised fourfold, up to ``escalations`` times; what the foot's turn leaves
+    short then, the ankle's lift takes; the lift (``final``), where still short, takes the
+    requirement itself (a foot in the ground is worse than a fast knee: the first steps from rest
+    whose dynamic ankle passes up to 31 mm below l9 just before heel strike, issue #36)."""
     out = np.zeros(len(grids.t))
-    slope = rate * grids.since
-    ends = rate * np.minimum(grids.since, grids.duration - grids.since) if capped_at_ends else np.inf
+    near_end = np.minimum(grids.since, grids.duration - grids.since)
     for sign in (1.0, -1.0):
-        out += sign * np.minimum(grids.envelope(np.maximum(sign * required, 0.0), slope), ends)
+        part = np.maximum(sign * required, 0.0)
+        if not np.any(part > 0):
+            continue
+        cone = grids.cone_envelope(part, GUARD_RATE)
+        per_step = np.full(len(grids.lengths), float(acceleration))
+        for attempt in range(escalations + 1):
+            a = per_step[grids.row]
+            # the fastest rise from an end: at the acceleration, then at the rate
+            ends = np.where(near_end * a < GUARD_RATE, 0.5 * a * near_end * near_end,
+                            GUARD_RATE * near_end - 0.5 * GUARD_RATE * GUARD_RATE / a)
+            turn = np.minimum(grids.smooth_envelope(cone, per_step), ends)
+            short = np.unique(grids.row[turn < part - 1e-12])
+            if not len(short):
+                break
+            per_step[short] *= 4.0
+        else:
+            if final:   # still short: the requirement itself there (the ground first)
+                turn = np.maximum(turn, part)
+        out += sign * turn
     return out
-
-
-def _rate_limited_turn(grids: _Grids, required, rate=GUARD_RATE):
-    """:func:`rate_limited_turn` of every step at once."""
-    return _cone_envelope(grids, required, rate, capped_at_ends=True)
 
 
 def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
@@ -159,61 +219,65 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
     dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
     flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
     wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
-    bend = _rate_limited_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0))
+    bend = _smooth_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0), final=True)
     reach = reach_for_knee_flexion(body, flexion + bend)
     # (>= 0: where the bend is a round-off above 0, the distance's round-off could lower the ankle)
     return np.where(bend > 0, np.maximum(drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0), 0.0)
 
 
-def _turned(body, feet: list, on: _Grids, ankle_y, shank):
+def _turned(body, feet: list, on: _Grids, ankle_y, shank, knee):
     """The schedule of every step on its grid, and the turn of the ground guard (rad) there:
     (scheduled θ5, θ6, turn), concatenated in order."""
     schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
-    scheduled, theta6 = schedule_angles(on.t, schedule, clamp)
+    scheduled, theta6 = schedule_angles(on.t, schedule, clamp, knee)
     required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
-    turn = _rate_limited_turn(on, required)
-    # the rate-limited turn lags where a large requirement falls off quickly (the schedule itself
-    # moving towards the level sole), and so can overshoot into the other limit: the toe then goes
-    # down where the heel needed the turn; clipped to both limits again, the clip rate-limited too
+    turn = _smooth_turn(on, required)
+    # the smooth turn lags where a large requirement falls off quickly (the schedule itself moving
+    # towards the level sole), and so can overshoot into the other limit: the toe then goes down
+    # where the heel needed the turn; clipped to both limits again, the clip smoothed too
     back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
     # (capped at the ends too: there the foot is the stance foot's, on the ground by construction)
-    return scheduled, theta6, turn + _cone_envelope(on, back, capped_at_ends=True)
+    return scheduled, theta6, turn + _smooth_turn(on, back)
 
 
-def _at_times(feet: list, times: list, on: _Grids, *on_grid):
-    """θ5 and θ6 of the schedules at each step's own ``times`` (concatenated in order), and each
-    of ``on_grid`` (values on the grids) interpolated linearly to those times."""
+def _at_times(feet: list, times: list, on: _Grids, knee, *on_grid):
+    """θ5 and θ6 of the schedules at each step's own ``times`` (concatenated in order), the knee
+    flexion ``knee`` on the grids interpolated linearly to them, and each of ``on_grid`` (values on
+    the grids) interpolated linearly to those times."""
     counts = [len(t) for t in times]
     at = {name: np.repeat([getattr(f, name) for f in feet], counts) for name in SCHEDULE_FIELDS}
-    theta5, theta6 = schedule_angles(np.concatenate(times), at, clamp)
-    out = [np.empty(len(theta5)) for _ in on_grid]
+    out = [np.empty(sum(counts)) for _ in (knee, *on_grid)]
     for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
         grid, mine = on.t[start:end], slice(stop - len(t), stop)
-        for o, values in zip(out, on_grid):
+        for o, values in zip(out, (knee, *on_grid)):
             o[mine] = np.interp(t, grid, values[start:end])
-    return theta5, theta6, out
+    theta5, theta6 = schedule_angles(np.concatenate(times), at, clamp, out[0])
+    return theta5, theta6, out[1:]
 
 
-def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank, knee) -> tuple[np.ndarray, np.ndarray]:
     """:func:`grounded_angles_on_grid` of the steps' swing feet ``feet``, each
-    at its own step-local times ``times[k]`` with its guard grid ``grids[k]``; ``ankle_y`` and
-    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 at the times."""
+    at its own step-local times ``times[k]`` with its guard grid ``grids[k]``; ``ankle_y``,
+    ``shank`` and ``knee`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 at
+    the times."""
     on = _Grids(grids)
-    _, _, turn = _turned(body, feet, on, ankle_y, shank)
-    theta5, theta6, (turn_t,) = _at_times(feet, times, on, turn)
+    _, _, turn = _turned(body, feet, on, ankle_y, shank, knee)
+    theta5, theta6, (turn_t,) = _at_times(feet, times, on, knee, turn)
     return theta5 + turn_t, theta6
 
 
 def lifted_feet(body, feet: list, times: list, grids: list, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`lifted_foot` of the steps' swing feet ``feet``, each at its own
     step-local times ``times[k]`` with its guard grid ``grids[k]``; ``hip``, ``ankle`` (m, 2) and
-    ``shank`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 and the
-    ankle's lift at the times, concatenated in order."""
+    ``shank`` (m,) are the leg on all grids, concatenated in order (its knee, which the body's foot
+    relaxes with, is their distance's). Returns θ5, θ6 and the ankle's lift at the times,
+    concatenated in order."""
     on = _Grids(grids)
-    scheduled, theta6, turn = _turned(body, feet, on, ankle[:, 1], shank)
+    knee = knee_flexion_for_reach(body, np.hypot(*(ankle - hip).T))
+    scheduled, theta6, turn = _turned(body, feet, on, ankle[:, 1], shank, knee)
     lowest = lowest_sole_point(body, ankle[:, 1], shank, scheduled + turn, theta6)
     lift = _ankle_lift(body, on, hip, ankle, lowest)
-    theta5_t, theta6_t, (turn_t, lift_t) = _at_times(feet, times, on, turn, lift)
+    theta5_t, theta6_t, (turn_t, lift_t) = _at_times(feet, times, on, knee, turn, lift)
     return theta5_t + turn_t, theta6_t, lift_t
 
 
@@ -225,9 +289,9 @@ def grounded_angles(body, foot: SwingFoot, t, leg) -> tuple[np.ndarray, np.ndarr
     The schedule, turned where it would put the toe or the heel into the ground
     (:func:`ground_limits`). A ground limit can move fast: where the lowest point of the heel's
     circle about the ankle grazes the ground, the limiting angle moves as the square root of
-    the ankle's height above it. So the turn away from the schedule is the least one that
-    meets the limits and changes by at most ``GUARD_RATE`` (the smallest cone envelope of the
-    required turns), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
+    the ankle's height above it. So the turn away from the schedule is the least C1 one that
+    meets the limits with its acceleration within ``GUARD_ACCELERATION`` (:func:`smooth_turn`:
+    a rate-limited turn's kinks were rate jumps of up to 400°/s), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
     same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
     foot continues and becomes the stance foot. Between the grid's points the limits hold to a
     fraction of a millimetre. Where the leg is too low for any foot (first steps from rest,
@@ -236,10 +300,10 @@ def grounded_angles(body, foot: SwingFoot, t, leg) -> tuple[np.ndarray, np.ndarr
     return grounded_angles_on_grid(body, foot, t, grid, *leg(grid))
 
 
-def grounded_angles_on_grid(body, foot: SwingFoot, t, grid, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+def grounded_angles_on_grid(body, foot: SwingFoot, t, grid, ankle_y, shank, knee) -> tuple[np.ndarray, np.ndarray]:
     """:func:`grounded_angles` with the leg's ankle height and shank angle at the times
     :func:`guard_grid` given. One step of :func:`grounded_feet`."""
-    return grounded_feet(body, [foot], [np.asarray(t, float)], [grid], ankle_y, shank)
+    return grounded_feet(body, [foot], [np.asarray(t, float)], [grid], ankle_y, shank, knee)
 
 
 def lifted_foot(body, foot: SwingFoot, t, grid, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -250,12 +314,13 @@ def lifted_foot(body, foot: SwingFoot, t, grid, hip, ankle, shank) -> tuple[np.n
     return lifted_feet(body, [foot], [np.asarray(t, float)], [grid], hip, ankle, shank)
 
 
-def rate_limited_turn(grid: np.ndarray, required: np.ndarray, rate: float = GUARD_RATE) -> np.ndarray:
-    """The least turn (rad) at the times ``grid`` (increasing) that is at least ``required`` where
-    that is positive and at most it where negative, changes by at most ``rate`` (rad/s) and is 0 at
-    both ends (the foot leaves and lands as the stance foot has it): the cone envelope
-    max_j(part_j - rate |t_i - t_j|) of each sign's part, capped by the ends' cones."""
-    return _rate_limited_turn(_Grids([np.asarray(grid, float)]), np.asarray(required, float), rate)
+def smooth_turn(grid: np.ndarray, required: np.ndarray, acceleration: float = GUARD_ACCELERATION,
+                escalations: int = 0) -> np.ndarray:
+    """The least C1 turn (rad) at the times ``grid`` (increasing, evenly spaced) that is at least
+    ``required`` where that is positive and at most it where negative, whose acceleration stays
+    within ± ``acceleration`` (rad/s²), and that is 0 at both ends (the foot leaves and lands as
+    the stance foot has it): :func:`_smooth_turn` of one step."""
+    return _smooth_turn(_Grids([np.asarray(grid, float)]), np.asarray(required, float), acceleration, escalations)
 
 
 def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowest: np.ndarray) -> np.ndarray:
@@ -267,7 +332,7 @@ def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowes
     (the straight knee of swing2's end and swing3 with the hip low: first steps from rest, closing
     steps, slow steps; docs/body.md), turning the foot cannot keep it out of the ground; the body
     then bends its knee, with the hip and the ankle's x kept, by the least angle that lifts the
-    lowest point of the foot onto the ground, the bend changing by at most GUARD_RATE and 0 at
-    toe-off and heel strike (:func:`rate_limited_turn`). The foot is carried up with the ankle,
+    lowest point of the foot onto the ground, the bend C1 with its acceleration within
+    GUARD_ACCELERATION and 0 at toe-off and heel strike (:func:`smooth_turn`). The foot is carried up with the ankle,
     unturned. Where the foot clears the ground the lift is 0 and the body's leg is the leg given."""
     return _ankle_lift(body, _Grids([np.asarray(grid, float)]), hip, ankle, lowest)

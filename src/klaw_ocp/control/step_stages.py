@@ -46,6 +46,9 @@ TOE_OFF_RATE_WINDOW = 0.1
 #: The stance ankle's rate at toe-off, which the swing foot's schedule starts with, is its
 #: difference over this much (s) before toe-off (the knee's schedule makes it smooth there).
 ANKLE_RATE_STEP = 1e-4
+#: the least knee flexion at t1 (rad) the body's swing foot relaxes against (kinematics/swing_foot.py):
+#: a closing step's curve P can end with the knee all but straight
+MIN_KNEE_T1 = 1e-3
 #: At t1 the toe is held this fraction of l1 above ``toe_clearance`` (swing1's end posture), so
 #: that swing2, whose path constraint is the clearance itself, does not start on its bound.
 TOE_MARGIN_AT_T1_REL = 0.01
@@ -215,7 +218,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
     end_slope = end_slope_for_knee_rate(b, shank_t1, hip_vel_t1, knee_rate)
     coeffs = curve_p_coefficients(a0, a_max, a_min, peak, d_travel, end_slope)
     swing_foot = SwingFoot(t_to, t1, t2, t.t_step, ds.theta5_toe_off, ds.theta6_toe_off, theta5_t1,
-                           theta5_hs, theta6_hs, ds.theta5d_toe_off)
+                           theta5_hs, theta6_hs, ds.theta5d_toe_off, max(knee_t1_angle, MIN_KNEE_T1))
     return CurveP(a0=a0, a_max=a_max, a_min=a_min, C=peak, D=d_travel, x0=x0, coefficients=coeffs, end_slope=end_slope,
                   theta5_toe_off=ds.theta5_toe_off, theta6_toe_off=ds.theta6_toe_off, theta5_t1=theta5_t1,
                   swing_foot=swing_foot)

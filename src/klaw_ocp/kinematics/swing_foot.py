@@ -4,23 +4,40 @@ known from the kinematic meta-off period, the latter are specified as locomotion
 
 One schedule per step, :class:`SwingFoot`, written once for two kinds of numbers: plain numpy
 arrays (the body's angles, the summary, tests) and CasADi symbols (the swing2 and swing3 clearance paths,
-:mod:`klaw_ocp.control.swing_law`), so the foot the solvers constrain is the foot the body shows.
+:mod:`klaw_ocp.control.swing_law`): the foot the solvers constrain and the foot the body shows are
+one schedule, which differ only in how θ5 comes back from its t1 angle in swing2 (below).
 
 The interpolation, our choice (the text says only "interpolated"), shaped after the ankle of
 people, who go on plantarflexing for a moment after toe-off, dorsiflex while the foot passes under
 the body and are back at about neutral from mid-swing to heel strike (docs/human-gait.md):
 
-- θ5 (ankle): over swing1 a cubic Hermite curve from its toe-off value, leaving at the stance
-  ankle's own rate there (``theta5_rate_toe_off``: no jump in rate at toe-off, and the push-off's
-  plantarflexion runs on for a few hundredths of a second), to ``theta5_t1`` at t1 with zero rate;
-  ``theta5_t1`` is the heel-strike attribute, dorsiflexed further where the toe under the knee at
-  t1 needs it (:func:`klaw_ocp.control.curve_p.swing1_end_posture`). Held through the first half of
-  swing2 (SWING2_HOLD_FRACTION), where the toe is lowest, then, while the extending knee lifts the
-  toe, back to the heel-strike attribute by t2 (a smoothstep: zero rate at both ends; swing2's
-  toe-clearance path constrains this foot: the paper's recovery loop keeps its toe
-  ``toe_clearance`` up), held through swing3, so the foot lands at eq. 3's angle with no rotation
-  left. Held dorsiflexed through swing2 instead, its heel came down to the ground as the knee
-  straightened and the ground guard turned it (a 6° wiggle near 90 % of the cycle);
+- θ5 (ankle): over swing1 a quintic Hermite curve from its toe-off value, leaving at the stance
+  ankle's own rate (``theta5_rate_toe_off``: no jump in rate at toe-off, and the push-off's
+  plantarflexion runs on for a few hundredths of a second), to ``theta5_t1`` at t1 at rest and
+  with zero acceleration; ``theta5_t1`` is the heel-strike attribute, dorsiflexed further where the
+  toe under the knee at t1 needs it (:func:`klaw_ocp.control.curve_p.swing1_end_posture`). From
+  t1 back to the heel-strike attribute, in one of two ways:
+
+  - **the foot the body shows relaxes with the knee** (``knee`` given): it keeps θ5_t1's
+    dorsiflexion in proportion to the knee's flexion, θ5 = θ5_hs + (θ5_t1 - θ5_hs)·S(θ4/θ4(t1)),
+    S = 10s³ - 15s⁴ + 6s⁵, s clipped to [0, 1]. While the knee is flexed (the shank behind the
+    vertical, the toe low) the foot stays up; as the extending knee swings the shank forward
+    under the body the foot comes back towards neutral with it, and reaches the attribute as the
+    knee reaches full extension at t2 at rest (swing2's final conditions; S's flat ends), so its
+    rate never jumps. Held at its t1 angle into swing2 instead, the heel met the ground as the
+    knee straightened, and the ground guard had to turn the foot by about 17° in 50 ms (rate
+    jumps of 350-400°/s at 5 km/h);
+  - **the foot swing2's toe-clearance path constrains** (no ``knee``): held through the first half
+    of swing2 (SWING2_HOLD_FRACTION), then back to the attribute by t2 (a smoothstep). The paper's
+    recovery loop keeps its toe ``toe_clearance`` up, and so the leg high enough for a foot. The
+    body's relaxed foot is not constrained in its place: in first steps from rest, closing steps
+    and slow steps the dynamic ankle passes lower than it clears, and the recovery then swung the
+    thigh forward at 3-30 N m/kg (docs/human-gait.md); there the body's ground guard turns the
+    foot and lifts the ankle.
+
+  Held from then on, so the foot lands at eq. 3's angle with no rotation left. Every piece of the
+  body's foot starts and ends with zero acceleration (C2): the cubic smoothstep's acceleration
+  steps, which the constrained foot keeps, were rate jumps of 190-320°/s between frames at 100 fps;
 - θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
 
 Swing2's toe-clearance path constrains the scheduled foot (the paper's recovery loop). Where the
@@ -41,7 +58,7 @@ from .leg_geometry import clamp
 
 #: the schedule's numbers, in the order the swing context carries them
 SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "theta6_toe_off",
-                   "theta5_t1", "theta5_heel_strike", "theta6_heel_strike", "theta5_rate_toe_off")
+                   "theta5_t1", "theta5_heel_strike", "theta6_heel_strike", "theta5_rate_toe_off", "theta4_t1")
 #: the fraction of swing2 through which the ankle holds its t1 angle before it relaxes to the
 #: heel-strike attribute: the toe is lowest about t1 and rises as the knee extends. Relaxing from t1
 #: on lowered the toe onto its clearance bound in first steps from rest, whose swing2 then swung
@@ -49,22 +66,35 @@ SCHEDULE_FIELDS = ("t_toe_off", "t1", "t2", "t_heel_strike", "theta5_toe_off", "
 SWING2_HOLD_FRACTION = 0.5
 
 
-def schedule_angles(t, s: dict, clip):
+def schedule_angles(t, s: dict, clip, knee=None):
     """θ5, θ6 at ``t`` for the schedule values ``s`` (SCHEDULE_FIELDS -> numbers or symbols);
-    ``clip(x, lo, hi)`` is numpy's or CasADi's (see the module docstring for the shape)."""
+    ``clip(x, lo, hi)`` is numpy's or CasADi's. ``knee``: the knee's flexion θ4 at ``t`` (read in
+    swing2 only) for the foot the body shows, None for the foot swing2's toe-clearance path
+    constrains (see the module docstring for both)."""
     span1 = s["t1"] - s["t_toe_off"]
     swing1 = clip((t - s["t_toe_off"]) / span1, 0.0, 1.0)
-    relax = s["t1"] + SWING2_HOLD_FRACTION * (s["t2"] - s["t1"])
-    swing2 = clip((t - relax) / (s["t2"] - relax), 0.0, 1.0)
-    smooth1 = swing1 * swing1 * (3 - 2 * swing1)
-    smooth2 = swing2 * swing2 * (3 - 2 * swing2)
-    # the cubic Hermite curve over swing1: from the toe-off angle at its rate to theta5_t1 at rest
-    rising = swing1 * (1 - swing1) * (1 - swing1)          # h10, the start rate's basis
-    theta5 = (s["theta5_toe_off"] + (s["theta5_t1"] - s["theta5_toe_off"]) * smooth1
-              + s["theta5_rate_toe_off"] * span1 * rising
-              + (s["theta5_heel_strike"] - s["theta5_t1"]) * smooth2)
+    smooth1 = _smootherstep(swing1)
+    # the quintic Hermite curve over swing1: from the toe-off angle at its rate to theta5_t1 at rest
+    rising = swing1 * (1 + swing1 * swing1 * (-6 + swing1 * (8 - 3 * swing1)))   # the start rate's basis
+    # how much of theta5_t1's dorsiflexion is kept (1 up to t1)
+    if knee is None:
+        relax = s["t1"] + SWING2_HOLD_FRACTION * (s["t2"] - s["t1"])
+        relaxing = clip((t - relax) / (s["t2"] - relax), 0.0, 1.0)
+        kept = 1 - relaxing * relaxing * (3 - 2 * relaxing)
+    else:
+        # in swing2 as much as the knee keeps of its flexion at t1, none from t2 on: steps in t
+        # where both sides agree (the knee is at theta4_t1 at t1 and straight at t2)
+        with_knee = _smootherstep(clip(knee / s["theta4_t1"], 0.0, 1.0))
+        kept = 1 - (t > s["t1"]) * (1 - (t < s["t2"]) * with_knee)
+    theta5 = (s["theta5_heel_strike"] + (s["theta5_t1"] - s["theta5_heel_strike"]) * kept
+              + (s["theta5_toe_off"] - s["theta5_t1"]) * (1 - smooth1) + s["theta5_rate_toe_off"] * span1 * rising)
     theta6 = s["theta6_toe_off"] + (s["theta6_heel_strike"] - s["theta6_toe_off"]) * smooth1
     return theta5, theta6
+
+
+def _smootherstep(x):
+    """10x³ - 15x⁴ + 6x⁵: from 0 to 1 with zero rate and zero acceleration at both ends."""
+    return x * x * x * (10 + x * (-15 + 6 * x))
 
 
 @dataclass(frozen=True)
@@ -80,11 +110,17 @@ class SwingFoot:
     theta5_heel_strike: float
     theta6_heel_strike: float
     #: the stance ankle's rate at toe-off (rad/s), which the swing ankle starts with
-    theta5_rate_toe_off: float = 0.0
+    theta5_rate_toe_off: float
+    #: the knee's flexion at t1 (rad, > 0: curve P's end posture), the scale of the body's foot's
+    #: relaxation with the knee
+    theta4_t1: float
 
-    def angles(self, t) -> tuple[np.ndarray, np.ndarray]:
-        """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,)."""
+    def angles(self, t, knee=None) -> tuple[np.ndarray, np.ndarray]:
+        """The scheduled θ5 and θ6 (rad) at step-local times ``t`` (n,): of the foot the body shows
+        given the knee's flexion ``knee`` (n,) there, of the foot swing2's path constrains
+        without (:func:`schedule_angles`)."""
         t = np.asarray(t, float)
         # the fields by name (dataclasses.asdict deep-copies: most of this method's time)
-        theta5, theta6 = schedule_angles(t, {name: getattr(self, name) for name in SCHEDULE_FIELDS}, clamp)
+        theta5, theta6 = schedule_angles(t, {name: getattr(self, name) for name in SCHEDULE_FIELDS}, clamp,
+                                         None if knee is None else np.asarray(knee, float))
         return np.full(t.shape, theta5), np.full(t.shape, theta6)   # (broadcast_to's copy costs several times more)
