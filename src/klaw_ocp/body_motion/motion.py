@@ -94,6 +94,16 @@ class LegPlanes:
         v = points[:, 1]
         return np.column_stack([points[:, 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg])
 
+    def all_to_world(self, side: str, points: dict) -> dict:
+        """:meth:`to_world` of several in-plane point arrays (n, 2) at every sample, in one pass
+        (name -> world points (n, 3))."""
+        hip, z_foot = self.hips[side], self.foot_z[side]
+        dz = hip[:, 2] - z_foot
+        v_leg = np.hypot(hip[:, 1], dz)
+        p = np.stack(list(points.values()))
+        v = p[..., 1]
+        return dict(zip(points, np.stack([p[..., 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg], axis=-1)))
+
 
 def step_windows(walk) -> list:
     """Each step as the upper body and the lateral displacement see it (:class:`.upper_body.StepWindow`)."""
@@ -293,17 +303,16 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
     model_hips = model_swing_hips(walk, samples.step[rows], samples.tau[rows], simulated[rows])
     swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips, own))
-    frames, start, legs = slice(None), 0, {}
+    start, legs = 0, {}
     for side, r in swinging.items():
         for name in _POINTS:
             in_plane[side][name][r] = swung[name][start:start + len(r)]
         start += len(r)
-        legs[side] = LegPoints(**{name: planes.to_world(side, in_plane[side][name][frames], frames)
-                                  for name in _POINTS})
-    t, root, pelvis = samples.t[frames], centre[frames], pelvis_angles[frames]
+        legs[side] = LegPoints(**planes.all_to_world(side, in_plane[side]))
+    t, root, pelvis = samples.t, centre, pelvis_angles
     angles = skeleton_angles(body, root, pelvis, legs, UpperBody.neutral())
     hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
-    upper = upper_body_motion(attrs, t, lean[frames], hip_flexion, pelvis)
+    upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis)
     for name, values in upper_body_angles(upper, len(t)).items():
         angles[:, ANGLE_NAMES.index(name)] = values
     return BodyMotion(t, root, pelvis, legs, upper, angles)
