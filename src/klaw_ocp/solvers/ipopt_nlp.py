@@ -31,6 +31,10 @@ from .kernels import KernelLibrary, source_key
 from .problem import SubphaseSpec
 
 NAMES = ("nlp", "grad_f", "jac_g", "hess_lag")
+#: IPOPT's barrier parameter when it starts from the previous pass's solution and multipliers: a
+#: solution is already near the central path's end, and the default 0.1 first walks back from it
+#: (a 1 km/h stance's repair: 38 iterations, 24 with this; the solutions differ by 2e-14)
+WARM_MU_INIT = 1e-6
 
 
 def _sparse_from_blocks(blocks: list, n_rows: int, n_cols: int) -> ca.MX:
@@ -121,8 +125,11 @@ def _build(spec: SubphaseSpec, n: int, substeps: int, compiling: bool) -> list:
 
 
 @built_once
-def ipopt_solver(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int) -> ca.Function:
-    """IPOPT on the subphase's multiple-shooting NLP (built or loaded once per process)."""
+def ipopt_solver(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, max_iter: int,
+                 warm: bool = False) -> ca.Function:
+    """IPOPT on the subphase's multiple-shooting NLP (built or loaded once per process); ``warm``:
+    the one that starts from a solution and its multipliers (the repair's later passes, whose
+    active path constraints changed a little), with a small barrier parameter."""
     parts = [source_key(sys.modules[__name__], integrator), "ipopt", spec.name, spec.nx, spec.nu, spec.nc, substeps, intervals]
     for fn in (spec.rhs, spec.final, spec.path, spec.residuals):
         parts.append(fn.serialize() if fn is not None else "-")
@@ -133,4 +140,8 @@ def ipopt_solver(spec: SubphaseSpec, intervals: int, substeps: int, tol: float, 
             "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "error_on_fail": False,
             "show_eval_warnings": False, "calc_lam_p": False, "no_nlp_grad": True,
             "grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
+    if warm:
+        opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": WARM_MU_INIT,
+                     "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
+                     "ipopt.warm_start_slack_bound_push": 1e-9})
     return ca.nlpsol(f"{spec.name}_ms_ipopt", "ipopt", nlp, opts)

@@ -273,7 +273,7 @@ class MultipleShootingSolver:
         weights = np.array([1.0 if f and spec.residuals is None else 0.0 for f in pb.fixed])
         params = np.concatenate([pb.x0, pb.grid, pb.context, pb.guess, pb.scale, weights])
         n_eq = n * spec.nx + spec.final.size1_out(0)
-        iterations, active, result = 0, None, None
+        iterations, active, result, sol = 0, None, None, None
         for _ in range(4):
             lower = path_bounds(pb, pb.grid, np.vstack([pb.x0, z0[: n * spec.nx].reshape(n, spec.nx)]))
             if lower is None:
@@ -286,8 +286,13 @@ class MultipleShootingSolver:
                 lbg = np.concatenate([lbg, lower.T.ravel()])
                 ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
             with IPOPT_LOCK:   # one IPOPT at a time, and these statistics this solve's (.thread_safety)
-                sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
-                stats = solver.stats()
+                if sol is not None:      # a later pass: from the last one's solution and multipliers
+                    warm = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations, True)
+                    sol = warm(x0=z0, p=params, lbg=lbg, ubg=ubg, lam_g0=sol["lam_g"], lam_x0=sol["lam_x"])
+                    stats = warm.stats()
+                else:
+                    sol = solver(x0=z0, p=params, lbg=lbg, ubg=ubg)
+                    stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
             z0 = np.asarray(sol["x"]).ravel()
             result = self._finish(pb, z0[: n * spec.nx], z0[n * spec.nx:], iterations, call,

@@ -134,6 +134,8 @@ function receive(m) {
     $("download-bvh").disabled = $("download-config").disabled = true;
     $("status").textContent = `walking (${m.method}${m.start_from_rest ? ", from rest" : ""})`;
   } else if (m.type === "step") {
+    // the joint positions come in whole millimetres (integers are the cheapest JSON to write)
+    m.frames.points = m.frames.points.map((frame) => frame.map((mm) => mm / 1000));
     steps.set(m.index, m);
     $("planned-step").textContent = m.planned.step;
     state.planned.push(m.planned);
