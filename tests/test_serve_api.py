@@ -4,6 +4,7 @@ reproduced by `klaw-ocp run` byte for byte, the limits, sessions that end."""
 from __future__ import annotations
 
 import json
+import time
 import pytest
 
 pytest.importorskip("starlette")
@@ -259,6 +260,11 @@ def test_the_real_server_keeps_serving_through_abuse():
             junk.send(json.dumps({"type": "need", "step": 1}))
         # closed mid-step
         assert urllib.request.urlopen(url + "/", timeout=10).status == 200
+        # a closed page's walk ends once the server reads the close, after the message or the
+        # walk's start it was handling (tens of milliseconds): the sessions count says when
+        deadline = time.monotonic() + 20
+        while json.loads(urllib.request.urlopen(url + "/info", timeout=10).read())["sessions"] and time.monotonic() < deadline:
+            time.sleep(0.02)
         with connect(ws_url, origin=url, open_timeout=20) as page:
             kinds = [json.loads(page.recv(timeout=30))["type"] for _ in range(2)]
             assert kinds == ["skeleton", "step"]
