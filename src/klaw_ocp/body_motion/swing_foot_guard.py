@@ -154,7 +154,7 @@ class _Grids:
         the padded rows, not an n x n matrix."""
         if not np.any(part > 0):
             return np.zeros(len(self.t))
-        lam = 2.0 / np.asarray(acceleration, float)                                                       # (steps,)
+        lam = 2.0 / np.asarray(acceleration, float)                                    # (steps,)
         spacing = self.duration[self.ends - 1] / np.maximum(self.lengths - 1, 1)      # each step's grid step
         band = int(math.ceil(math.sqrt(2 * lam.max() * float(part.max())) / spacing.min())) + 1
         squared = (np.arange(-band, band + 1) * spacing[:, None]) ** 2                 # (steps, 2 band + 1)
@@ -290,9 +290,10 @@ def grounded_angles(body, foot: SwingFoot, t, leg) -> tuple[np.ndarray, np.ndarr
     (:func:`ground_limits`). A ground limit can move fast: where the lowest point of the heel's
     circle about the ankle grazes the ground, the limiting angle moves as the square root of
     the ankle's height above it. So the turn away from the schedule is the least C1 one that
-    meets the limits with its acceleration within ``GUARD_ACCELERATION`` (:func:`smooth_turn`:
-    a rate-limited turn's kinks were rate jumps of up to 400°/s), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is the
-    same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
+    meets the limits with its rate within ``GUARD_RATE`` and its acceleration within
+    ``GUARD_ACCELERATION`` (:func:`smooth_turn`: a merely rate-limited turn's kinks were rate
+    jumps of up to 400°/s), computed on a fixed grid of the swing (GUARD_GRID s), so the foot is
+    the same whatever frames it is sampled at; and it is 0 at toe-off and at heel strike, where the
     foot continues and becomes the stance foot. Between the grid's points the limits hold to a
     fraction of a millimetre. Where the leg is too low for any foot (first steps from rest,
     closing steps, slow steps), turning it cannot help: :func:`lifted_foot` lifts the ankle."""
@@ -301,8 +302,8 @@ def grounded_angles(body, foot: SwingFoot, t, leg) -> tuple[np.ndarray, np.ndarr
 
 
 def grounded_angles_on_grid(body, foot: SwingFoot, t, grid, ankle_y, shank, knee) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`grounded_angles` with the leg's ankle height and shank angle at the times
-    :func:`guard_grid` given. One step of :func:`grounded_feet`."""
+    """:func:`grounded_angles` with the leg's ankle height, shank angle and knee flexion at the
+    times :func:`guard_grid` given. One step of :func:`grounded_feet`."""
     return grounded_feet(body, [foot], [np.asarray(t, float)], [grid], ankle_y, shank, knee)
 
 
@@ -332,7 +333,7 @@ def ankle_lift(body, grid: np.ndarray, hip: np.ndarray, ankle: np.ndarray, lowes
     (the straight knee of swing2's end and swing3 with the hip low: first steps from rest, closing
     steps, slow steps; docs/body.md), turning the foot cannot keep it out of the ground; the body
     then bends its knee, with the hip and the ankle's x kept, by the least angle that lifts the
-    lowest point of the foot onto the ground, the bend C1 with its acceleration within
-    GUARD_ACCELERATION and 0 at toe-off and heel strike (:func:`smooth_turn`). The foot is carried up with the ankle,
-    unturned. Where the foot clears the ground the lift is 0 and the body's leg is the leg given."""
+    lowest point of the foot onto the ground, the bend as smooth as the foot's turn
+    (:func:`smooth_turn`) and 0 at toe-off and heel strike. The foot is carried up with the
+    ankle, unturned. Where the foot clears the ground the lift is 0 and the body's leg is the leg given."""
     return _ankle_lift(body, _Grids([np.asarray(grid, float)]), hip, ankle, lowest)

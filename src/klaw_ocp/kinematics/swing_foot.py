@@ -40,10 +40,9 @@ the body and are back at about neutral from mid-swing to heel strike (docs/human
   steps, which the constrained foot keeps, were rate jumps of 190-320°/s between frames at 100 fps;
 - θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
 
-Swing2's toe-clearance path constrains the scheduled foot (the paper's recovery loop). Where the
-schedule would put the toe or the heel into the ground, the foot the body shows after the walk is
-turned, or lifted with the ankle (:mod:`klaw_ocp.body_motion.swing_foot_guard`); the solvers never
-see that guard.
+Where the schedule would put the toe or the heel into the ground, the foot the body shows after
+the walk is turned, or lifted with the ankle (:mod:`klaw_ocp.body_motion.swing_foot_guard`); the
+solvers never see that guard.
 
 Angles (rad): θ5 from the shank's axis to the foot's (90° neutral, more is dorsiflexion), θ6 the
 toe segment's angle to the foot (> 0 toe up). Times are the step's own (0 at its heel strike).
