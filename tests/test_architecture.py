@@ -20,8 +20,10 @@ ALLOWED = {
     "kinematics": {"body"},
     "config": BASE | {"gait", "config_paths", "config_yaml", "body", "choices"},
     "control": BASE | {"kinematics", "dynamics", "solvers", "gait", "body", "choices", "casadi_builds"},
-    "walk": BASE | {"control", "kinematics", "dynamics", "solvers", "gait", "config", "console", "stop_signals",
-                    "body", "choices"},
+    # the middle level's state machine, one step at a time (shared by walk and stepwise)
+    "step_loop": BASE | {"control", "kinematics", "dynamics", "body"},
+    "walk": BASE | {"step_loop", "control", "kinematics", "dynamics", "solvers", "gait", "config", "console",
+                    "stop_signals", "body", "choices"},
     "body_motion": {"kinematics", "dynamics", "gait", "body"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
@@ -33,7 +35,7 @@ ALLOWED = {
                      "result_files", "figures", "compare", "choices", "sweep_pool", "stop_signals"},
     "reproduce": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
                          "result_files", "figures", "compare", "choices"},
-    "stepwise": BASE | {"walk", "body_motion", "config", "control", "gait", "results", "solvers"},
+    "stepwise": BASE | {"walk", "step_loop", "body_motion", "config", "control", "gait", "results", "solvers"},
     # the web playground: it drives a stepwise walk; nothing below it knows of the web
     "serve": BASE | {"stepwise", "config", "gait", "body_motion", "result_files", "choices"},
 }

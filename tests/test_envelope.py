@@ -98,6 +98,7 @@ def solver_calls(monkeypatch):
     the step controller, any subphase solve) records its name and raises: the list stays empty
     only if nothing of the solving machinery was touched."""
     import klaw_ocp.solvers as solvers
+    import klaw_ocp.step_loop as step_loop
     import klaw_ocp.walk as walk
     from klaw_ocp.control.step import StepController
     from klaw_ocp.solvers.multiple_shooting import MultipleShootingSolver
@@ -111,7 +112,7 @@ def solver_calls(monkeypatch):
             raise AssertionError(f"{name} was called before the config was refused")
         return called
 
-    for owner, attr in [(walk, "make_solver"), (solvers, "make_solver"), (walk, "periodic_start"),
+    for owner, attr in [(walk, "make_solver"), (solvers, "make_solver"), (step_loop, "periodic_start"),
                         (StepController, "__init__"), (StepController, "solve_step"),
                         (StepController, "solve_stance"), (MultipleShootingSolver, "solve"),
                         (MultipleShootingSolver, "prepare"), (PlainShootingSolver, "solve"),

@@ -77,12 +77,33 @@ def test_changes_ramp_within_the_per_step_limits_and_reach_their_target(session)
     assert ready[-1].closing and ready[-1].result.plan.parameters.step_length_m == 0.0
 
 
-def test_a_change_shows_from_the_third_step_after_the_one_on_screen():
-    live = StepwiseWalk(config())
-    ready = drive(live, {0: lambda: live.request(speed=4.0), 4: live.stop})
+@pytest.mark.parametrize("method", METHODS)
+def test_a_change_or_a_stop_shows_from_the_second_step_after_the_one_on_screen(method):
+    live = StepwiseWalk(config(method))
+    ready = drive(live, {0: lambda: live.request(speed=4.0), 3: live.stop})
     speeds = [r.result.plan.parameters.speed_kmh for r in ready]
-    # step 0 on screen, step 1 solved, step 2 planned: step 3 is the first that can change
-    assert speeds[:3] == [5.0, 5.0, 5.0] and speeds[3] == pytest.approx(4.0)
+    # step 0 on screen, step 1 solved, step 2 planned: step 2 is planned again before it is
+    # solved, with the change; the stop asked with step 3 on screen closes the walk at step 5
+    assert speeds[:2] == [5.0, 5.0] and speeds[2:5] == pytest.approx([4.0] * 3)
+    assert [r.closing for r in ready] == [False] * 5 + [True] and speeds[5] == 0.0
+    # and the walk is the one its exported schedule solves, its frames the whole walk's
+    again = simulate_walk(live.reproducing_config())
+    for a, b in zip(again.steps, live.walk.steps, strict=True):
+        for sa, sb in zip(a.subphases, b.subphases):
+            assert np.array_equal(sa.states, sb.states), (a.index, sa.name)
+    fps = live.spec.fps
+    assert bvh_text(body_motion(again, fps), again.spec.body, fps) == bvh_text(body_motion(live.walk, fps), live.body, fps)
+    whole = body_motion(live.walk, fps)
+    np.testing.assert_allclose(np.vstack([r.frames.angles for r in ready]), whole.angles, rtol=0, atol=1e-9)
+
+
+def test_a_plan_asked_again_without_a_change_is_the_plan_made_before():
+    live = StepwiseWalk(config())
+    live.next_step()
+    planned = live.last_planned
+    live.request(speed=5.0)             # the walk's own speed: nothing to change
+    live.next_step()
+    assert live.walk.steps[2].plan is planned
 
 
 @pytest.mark.parametrize("values, field", [({"speed": 30.0}, "walk.speed"), ({"step_length": 2.0}, "walk.step"),

@@ -46,14 +46,15 @@ SCRIPT = textwrap.dedent("""
                 return result
             StepController.solve_step = slow
         elif moment in ("solver", "periodic_start"):
+            import klaw_ocp.step_loop as step_loop
             import klaw_ocp.walk as walk
-            name = "StepController" if moment == "solver" else "periodic_start"
-            original = getattr(walk, name)
+            owner, name = (walk, "StepController") if moment == "solver" else (step_loop, "periodic_start")
+            original = getattr(owner, name)
             def held(*args, **kwargs):
                 ready()
                 time.sleep(1.0)
                 return original(*args, **kwargs)
-            setattr(walk, name, held)
+            setattr(owner, name, held)
         elif moment == "plots":
             from klaw_ocp.figures import render_pool
             render_pool.PRELOAD.append("slow_draw")

@@ -38,7 +38,8 @@ from .gait.plan import MAX_STEPS, MAX_WALK_S, PARAMETER_KEYS, plan_step
 from .results import step_table
 from .solvers import make_solver
 from .solvers.thread_safety import solving
-from .walk import StepLoop, Walk, walk_spec
+from .step_loop import StepLoop
+from .walk import Walk, walk_spec
 
 
 @dataclass(frozen=True)
@@ -192,6 +193,24 @@ class StepwiseWalk:
         self._plans.append(plan)
         return plan
 
+    def _revise_next_plan(self) -> None:
+        """Plan the next step again from the target as it stands now, if it has changed since
+        that plan was made (or a stop was asked): the step before it is solved, but its frames,
+        which read this plan, are not made yet (:meth:`StepLoop.revise_next`). A change then
+        reaches the second step after the one on screen, not the third."""
+        k = self._loop.k
+        if k == 0 or self._loop.current is None or k != len(self._plans) - 1 or self._closing_at is not None:
+            return
+        plan, requested, parameters = self._plans.pop(), self._requested.pop(), self._parameters.pop()
+        refusals = len(self.refusals)
+        revised = self._plan_next(k)
+        if self._closing_at is None and self._requested[-1] == requested:
+            # nothing asked since: the plan made before stands
+            self._plans[-1], self._requested[-1], self._parameters[-1] = plan, requested, parameters
+            del self.refusals[refusals:]
+            return
+        self.walk.steps[-1] = self._loop.revise_next((revised, self._closing_at == k))
+
     def _plan_of(self, k: int):
         if k < len(self._plans):
             return self._plans[k], self._closing_at == k
@@ -205,6 +224,7 @@ class StepwiseWalk:
         :class:`~klaw_ocp.errors.ConvergenceError` if a step does not converge."""
         t0 = time.perf_counter()
         while not self.ended and len(self.walk.steps) <= self._shown + 1:
+            self._revise_next_plan()
             with solving():
                 result = self._loop.solve_next()
             if result is None:

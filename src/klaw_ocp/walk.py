@@ -30,13 +30,12 @@ from .body import Body
 from .config import DEFAULT_FPS
 from .console import CasadiMessages, DeferredInterrupt
 from .control.gains import control_gains
-from .control.periodic_start import periodic_start
-from .control.step import StepController, StepInput, StepResult
-from .dynamics import heel_strike_map
+from .control.step import StepController, StepResult
 from .errors import ConvergenceError, Interrupted
-from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames, hind_foot_at_rest
+from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
+from .step_loop import StepLoop
 from .solvers.thread_safety import solving
 from .stop_signals import stopped_words
 
@@ -101,66 +100,6 @@ class Walk:
         t_after, hips_after = following.hind_samples
         t = np.concatenate([step.subphase("stance").t, t_after[1:]])
         return following.hind_foot.frames(t, np.vstack([step.stance_hips, hips_after[1:]]))
-
-
-def _first_input(controller: StepController, spec: WalkSpec) -> StepInput:
-    b, plan = spec.body, spec.plans[0]
-    con = plan.constraints
-    attrs = spec.attributes
-    if spec.start_from_rest:
-        x0 = np.array([b.l1, 0.0, controller.gains.theta2_ref, 0.0, 0.0, 0.0])
-        return StepInput(x0, con.ankle_x, con.ankle_x, b.l1, 0.0, stance_standing=True)
-    inp = StepInput(None, con.ankle_x, con.ankle_x - con.step_length, con.hip_y - b.l9,
-                    _excursion(b, attrs, con.hip_y - b.l9, con.hip_y - b.l9))
-    inp.x0 = periodic_start(controller, plan, inp)
-    return inp
-
-
-def _excursion(body: Body, attrs, y_start: float, y_end: float) -> float:
-    """Height of the hip's mid-step bump above the higher heel-strike height (§4.2, Inman)."""
-    midstance = body.l1 * (1 - attrs.midstance_leg_shortening)
-    return max(midstance - max(y_start, y_end), attrs.min_hip_excursion_rel * body.l1)
-
-
-class StepLoop:
-    """The state machine one step at a time, shared by :func:`simulate_walk` and
-    :class:`klaw_ocp.stepwise.StepwiseWalk`, so that both give the same numbers for the same plans.
-
-    ``plan_of(k)`` gives step k's plan and whether it is the closing step that ends at rest, or
-    None when the walk has no step k. It is asked for step k + 1 before step k is solved (principle
-    1: the high level before the step): this stance leg's toe-off ends the next step's double
-    support, so its knee schedule needs that step's t_ds, and the heel-strike map its plan. A
-    caller that decides the plans as the walk goes (the live playground) decides each one a step
-    ahead."""
-
-    def __init__(self, spec: WalkSpec, controller: StepController, plan_of):
-        self.spec, self.controller, self.plan_of = spec, controller, plan_of
-        self.k = 0
-        self.current = plan_of(0)
-        first = self.current[0]
-        inp = _first_input(controller, spec)
-        self.initial_state = inp.x0
-        # the kinematics meet the dynamics here: the virtual leg of each stance (§4.2) becomes
-        # the next step's hind leg, whose toe-off starts that step's swing1
-        inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
-                                          first.timings.t_cycle, first.timings.t_ds)
-        self.inp = inp
-
-    def solve_next(self) -> StepResult | None:
-        """Solve the next step and return it; None once the walk has no step left."""
-        if self.current is None:
-            return None
-        (plan, at_rest), k = self.current, self.k
-        following = self.plan_of(k + 1)
-        next_plan = following[0] if following is not None else None
-        # this stance leg's toe-off ends the next step's double support: its knee schedule
-        # runs to that toe-off (this step's own where there is no next step)
-        self.inp.next_t_ds = next_plan.timings.t_ds if next_plan is not None else None
-        result: StepResult = self.controller.solve_step(plan, self.inp, k, at_rest=at_rest)
-        # the step's stance leg is the next step's hind leg, whose double support completes it
-        self.inp = _next_input(self.spec, plan, result, next_plan)
-        self.current, self.k = following, k + 1
-        return result
 
 
 def simulate_walk(spec, method: str | None = None, progress: bool = False, raise_on_failure: bool = True,
@@ -353,22 +292,6 @@ def closing_plan(spec: WalkSpec):
     with theta1d = 0 (a braking level of F_theta1 after 0.4 t_step)."""
     from .gait import closing_step
     return closing_step(spec.body, spec.attributes, spec.plans[-1])
-
-
-def _next_input(spec: WalkSpec, plan, result: StepResult, next_plan) -> StepInput | None:
-    """Heel strike: the swing leg lands at the next stance origin; map the stance state onto it."""
-    if next_plan is None:
-        return None
-    b, con = spec.body, plan.constraints
-    # the new stance starts from the landing leg's own hip, the pelvis's other one (§4.2): the
-    # one-hip stance model's hip passes from one hip of the pelvis to the other, whose velocities
-    # agree there (the pelvis turns with zero rate at heel strike)
-    x_post = heel_strike_map(b, result.final_stance_state, np.array([con.step_length, 0.0]),
-                             hip_shift=np.array([con.hip_shift, 0.0]))
-    y_start = con.hip_y - b.l9
-    y_end = next_plan.constraints.hip_y - b.l9
-    excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
-    return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion, hind_foot=result.stance_foot)
 
 
 def walk_spec(config, method: str | None = None) -> WalkSpec:
