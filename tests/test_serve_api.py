@@ -73,8 +73,8 @@ def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
         assert len(points) == len(first["frames"]["t"]) and len(points[0]) == 3 * (37 + len(skeleton["end_sites"]))
         ws.send_text(json.dumps({"type": "need", "step": 5}))         # no further than the step after those sent
         assert receive(ws, "step")["index"] == 1
-        ws.send_text(json.dumps({"type": "export"}))                   # the next message: nothing was solved meanwhile
-        assert receive(ws, "refused")["field"] == "export"
+        ws.send_text(json.dumps({"type": "export"}))                   # the walk so far, while it walks
+        assert receive(ws, "export")["steps"] == 2
         ws.send_text(json.dumps({"type": "need", "step": 2}))
         assert receive(ws, "step")["index"] == 2
 
@@ -98,7 +98,7 @@ def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(
     ('{"type": "start", "settings": {"body.height": 3.0}}', "body.height"),
     ('{"type": "start", "settings": {"output.dir": "/etc"}}', "settings"),
     ('{"type": "start", "settings": {"attributes.pelvic_list": 90}}', "attributes.pelvic_list"),
-    ('{"type": "need", "step": -1}', "step"), ('{"type": "export"}', "export"),
+    ('{"type": "need", "step": -1}', "step"),
 ])
 def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text, field):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
@@ -109,16 +109,24 @@ def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text,
         assert len(walk_steps(ws, 2)) == 2
 
 
-def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, tmp_path, monkeypatch):
+@pytest.mark.parametrize("stopped", [True, False], ids=["stopped at rest", "mid-walk"])
+def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, tmp_path, monkeypatch, stopped):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
         walk_steps(ws, 2)
         ws.send_text(json.dumps({"type": "set", "values": {"speed": 4.0, "step_length": 0.7}}))
-        walk_steps(ws, 3)
-        ws.send_text(json.dumps({"type": "stop"}))
-        while (step := receive(ws, "step", skip=("accepted", "stopping", "ended")))["closing"] is False:
-            ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
+        walk_steps(ws, 2)
+        if stopped:
+            ws.send_text(json.dumps({"type": "stop"}))
+            while (step := receive(ws, "step", skip=("accepted", "stopping", "ended")))["closing"] is False:
+                ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
+        else:
+            assert receive(ws, "step")["index"] == 4       # on the page; step 5 not asked for yet
         ws.send_text(json.dumps({"type": "export"}))
         exported = receive(ws, "export", skip=("accepted", "stopping", "ended"))
+        if not stopped:     # the walk so far, and the walk goes on after it
+            assert exported["steps"] == 5
+            ws.send_text(json.dumps({"type": "need", "step": 5}))
+            assert receive(ws, "step")["index"] == 5
     config = tmp_path / "session.yaml"
     config.write_text(exported["config"], encoding="utf-8")
     monkeypatch.chdir(tmp_path)

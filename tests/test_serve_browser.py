@@ -110,6 +110,11 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         assert line == "walk.speed: got 11.5 km/h, allowed 0.5 to 9 km/h (attributes.speed_min/speed_max)"
         walked = len(browser.execute_script("return window.klaw.shown"))
         wait_for(browser, f"return window.klaw.shown.length >= {walked + 1}")
+        # the walk so far, downloaded while it walks (the config that reproduces it)
+        browser.find_element("id", "download-config").click()
+        exported = wait_for(browser, "return window.klaw.exported")
+        assert exported["file"] == "config" and exported["steps"] >= walked and exported["config_chars"] > 500
+        browser.execute_script("window.klaw.exported = null")
         # stop at rest, then the downloads: walk.bvh from the page's button
         browser.find_element("id", "stop").click()
         wait_for(browser, "return window.klaw.ended", timeout=30)

@@ -127,11 +127,37 @@ def test_a_gait_limit_is_a_gait_limit_error():
         live.request(speed=30.0)
 
 
-def test_a_walking_session_has_no_reproducing_config_yet():
+@pytest.mark.parametrize("method", METHODS)
+def test_a_walk_exported_mid_walk_is_the_walk_its_config_solves_to_the_bit(method):
+    live = StepwiseWalk(config(method, start_from_rest=True))
+    drive_until = {1: lambda: live.request(speed=4.0, step_length=0.7)}
+    while (step := live.next_step()).index < 4:
+        drive_until.get(step.index, lambda: None)()
+    # steps 0-4 handed out, step 5 solved, step 6 planned: the walk so far is steps 0-4
+    cfg = live.reproducing_config()
+    assert cfg.walk.steps == 5 and not cfg.walk.end_at_rest and cfg.walk.schedule
+    again, so_far = simulate_walk(cfg), live.walk_so_far()
+    assert len(again.steps) == len(so_far.steps) == 5
+    for a, b in zip(again.steps, so_far.steps, strict=True):
+        assert a.plan == b.plan
+        for sa, sb in zip(a.subphases, b.subphases):
+            assert np.array_equal(sa.states, sb.states), (a.index, sa.name)
+    fps = cfg.output.fps
+    assert bvh_text(body_motion(again, fps), again.spec.body, fps) == bvh_text(body_motion(so_far, fps), live.body, fps)
+    # the walk goes on after an export, and a stop ends it as it would have
+    live.stop()
+    drive(live, {})
+    assert live.ended and live.reproducing_config().walk.end_at_rest
+
+
+def test_an_export_holds_at_least_one_step_and_no_more_than_were_solved():
     live = StepwiseWalk(config())
+    with pytest.raises(ConfigError, match="session.steps"):
+        live.reproducing_config()           # nothing handed out yet
     live.next_step()
-    with pytest.raises(ConfigError, match="still walking"):
-        live.reproducing_config()
+    with pytest.raises(ConfigError, match="session.steps: got 3"):
+        live.walk_so_far(3)                 # steps 0 and 1 solved
+    assert live.reproducing_config().walk.steps == 1
 
 
 def test_a_walk_that_is_never_changed_exports_its_plain_request():

@@ -61,8 +61,8 @@ class StepLoop:
         inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
                                           first.timings.t_cycle, first.timings.t_ds)
         self.inp = inp
-        #: the step solved last: (its plan, its result, whether its stance started standing)
-        self._solved = None
+        #: the step solved last
+        self.last: StepResult | None = None
 
     def solve_next(self) -> StepResult | None:
         """Solve the next step and return it; None once the walk has no step left."""
@@ -74,35 +74,40 @@ class StepLoop:
         # this stance leg's toe-off ends the next step's double support: its knee schedule
         # runs to that toe-off (this step's own where there is no next step)
         self.inp.next_t_ds = next_plan.timings.t_ds if next_plan is not None else None
-        standing = self.inp.stance_standing
         result: StepResult = self.controller.solve_step(plan, self.inp, k, at_rest=at_rest)
         # the step's stance leg is the next step's hind leg, whose double support completes it
         self.inp = _next_input(self.spec, plan, result, next_plan)
         self.current, self.k = following, k + 1
-        self._solved = (plan, result, standing)
+        self.last = result
         return result
 
     def revise_next(self, following) -> StepResult:
         """Give the next step, not yet solved, another plan (``(plan, at_rest)``, as ``plan_of``
-        gives), and return the step solved last as it is with that plan after it.
-
-        The step solved last read its successor's plan in two places only, neither of them its
-        dynamics: its stance leg's virtual-leg rules (the knee's schedule runs to the toe-off that
-        ends the next step's double support, whose length the plan fixes) and the heel-strike
-        map's next input (the next stance's hip sinusoid). Both are made again here, so the walk
-        is the one whose plans were these from the start, to the bit (tests/test_stepwise.py):
-        the live playground moves a change one step earlier so."""
-        if self.current is None or self._solved is None:
+        gives), and return the step solved last as it is with that plan after it
+        (:func:`with_next_plan`): the walk is then the one whose plans were these from the start,
+        to the bit (tests/test_stepwise.py). The live playground moves a change one step earlier
+        so."""
+        if self.current is None or self.last is None:
             raise ValueError("revise_next: no step solved yet, or the walk has ended")
-        plan, result, standing = self._solved
-        body, attrs = self.controller.body, self.controller.attrs
-        foot = stance_leg_rules(body, attrs, plan, result.subphase("stance"), result.stance_hips, result.origin_x,
-                                standing, following[0].timings.t_ds)
-        result = replace(result, stance_foot=foot)
-        self._solved = (plan, result, standing)
-        self.inp = _next_input(self.spec, plan, result, following[0])
+        self.last = with_next_plan(self.controller, self.spec, self.last, following[0])
+        self.inp = _next_input(self.spec, self.last.plan, self.last, following[0])
         self.current = following
-        return result
+        return self.last
+
+
+def with_next_plan(controller: StepController, spec, result: StepResult, next_plan) -> StepResult:
+    """The solved step ``result`` as it is with ``next_plan`` after it (None: as the walk's last
+    step, which a walk of its steps so far ends with).
+
+    A step reads its successor's plan in two places only, neither of them its dynamics: its stance
+    leg's virtual-leg rules (the knee's schedule runs to the toe-off that ends the next step's
+    double support, whose length the plan fixes) and the heel-strike map's next input
+    (:func:`_next_input`, the next stance's hip sinusoid). This makes the first again."""
+    standing = result.index == 0 and spec.start_from_rest      # as _first_input starts it
+    foot = stance_leg_rules(controller.body, controller.attrs, result.plan, result.subphase("stance"),
+                            result.stance_hips, result.origin_x, standing,
+                            next_plan.timings.t_ds if next_plan is not None else None)
+    return replace(result, stance_foot=foot)
 
 
 def _next_input(spec, plan, result: StepResult, next_plan) -> StepInput | None:

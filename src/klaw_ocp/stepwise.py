@@ -38,7 +38,7 @@ from .gait.plan import MAX_STEPS, MAX_WALK_S, PARAMETER_KEYS, plan_step
 from .results import step_table
 from .solvers import make_solver
 from .solvers.thread_safety import solving
-from .step_loop import StepLoop
+from .step_loop import StepLoop, with_next_plan
 from .walk import Walk, walk_spec
 
 
@@ -246,16 +246,37 @@ class StepwiseWalk:
         is the one after it."""
         return self._plans[-1]
 
-    def reproducing_config(self) -> ExperimentConfig:
-        """The experiment that ``klaw-ocp run`` solves into this walk, step for step: the first
-        step's speed and step length, a schedule entry at every step whose (v, sl) differs from
-        the base (eq. 1 would complete a speed interpolated between two entries from its completed
-        value, a bit off the one asked for, so every step from the first change to the last has
-        its own entry), and the number of steps solved. Only a walk
-        that has ended is the same walk again (a walking one's last step knows its next step)."""
-        if not self.ended:
-            raise ConfigError("session: still walking, allowed only once the walk has ended (stop it first)")
-        regular = self._closing_at if self._closing_at is not None else len(self.walk.steps)
+    def _steps_so_far(self, steps: int | None) -> int:
+        """How many steps an export holds: ``steps``, or every step once the walk has ended, else
+        the steps handed out; at least one, at most those solved."""
+        n = (len(self.walk.steps) if self.ended else self._shown) if steps is None else steps
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= len(self.walk.steps):
+            raise ConfigError(out_of_range("session.steps", n, f"a whole number of steps from 1 to the "
+                                           f"{len(self.walk.steps)} solved (a walk's first step handed out)"))
+        return n
+
+    def walk_so_far(self, steps: int | None = None) -> Walk:
+        """The walk of its first ``steps`` steps (default: as :meth:`reproducing_config`), the last
+        of them as the last step of a walk that ends there has it (its stance leg's knee schedule
+        runs to its own double support's length, not the next step's: :func:`~klaw_ocp.step_loop.
+        with_next_plan`): the walk ``klaw-ocp run`` of :meth:`reproducing_config` solves, to the bit."""
+        n = self._steps_so_far(steps)
+        last = with_next_plan(self._loop.controller, self.spec, self.walk.steps[n - 1], None)
+        walk = Walk(self.spec, [*self.walk.steps[:n - 1], last])
+        walk.initial_state = self.walk.initial_state
+        return walk
+
+    def reproducing_config(self, steps: int | None = None) -> ExperimentConfig:
+        """The experiment that ``klaw-ocp run`` solves into this walk's first ``steps`` steps
+        (default: the whole walk once it has ended, else the steps handed out so far), step for
+        step (:meth:`walk_so_far`): the first step's speed and step length, a schedule entry at
+        every step whose (v, sl) differs from the base (eq. 1 would complete a speed interpolated
+        between two entries from its completed value, a bit off the one asked for, so every step
+        from the first change to the last has its own entry), and the number of steps; ending at
+        rest if the closing step is among them."""
+        n = self._steps_so_far(steps)
+        at_rest = self._closing_at is not None and n > self._closing_at
+        regular = self._closing_at if at_rest else n
         requested = self._requested[:regular]
         changes = [i for i in range(1, len(requested)) if requested[i] != requested[i - 1]]
         first = next((i for i, r in enumerate(requested) if r != self._base), None)
@@ -264,7 +285,7 @@ class StepwiseWalk:
         data = self.config.model_dump(mode="json")
         data["walk"] = {"speed": self._base[0], "step_length": self._base[1], "steps": regular,
                         "schedule": schedule, "start_from_rest": self.spec.start_from_rest,
-                        "end_at_rest": self._closing_at is not None}
+                        "end_at_rest": at_rest}
         data["solver"]["method"] = self.spec.method
         data["attributes"] = self.attributes.as_dict()
         check_walk_size(regular, self.spec.intervals)

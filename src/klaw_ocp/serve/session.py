@@ -105,17 +105,21 @@ class LiveSession:
         self.wake.set()
 
     async def _export(self) -> None:
+        """The walk so far, every step the page has been sent (the whole walk once it ended), as
+        walk.bvh and as the config that ``klaw-ocp run`` solves into the same walk.bvh, byte for
+        byte (:meth:`~klaw_ocp.stepwise.StepwiseWalk.walk_so_far`)."""
         live = self.live
-        if live is None or not live.ended or self.sent < len(live.walk.steps) - 1:
-            raise Refused("export", "export: got a walk still walking, allowed once the walk has stopped at rest "
-                                    "(press stop first)")
-        config = live.reproducing_config()
+        if live is None or self.sent < 0:
+            raise Refused("export", "export: got a walk with no step on the page yet, allowed once its first "
+                                    "step is shown")
+        steps = self.sent + 1
+        config = live.reproducing_config(steps)
         fps = live.spec.fps
-        bvh = await asyncio.to_thread(lambda: bvh_text(body_motion(live.walk, fps), live.body, fps))
+        bvh = await asyncio.to_thread(lambda: bvh_text(body_motion(live.walk_so_far(steps), fps), live.body, fps))
         header = ("The walk of a klaw-ocp serve session: `klaw-ocp run` of this file solves the same steps\n"
                   "and writes the same walk.bvh, byte for byte (docs/serve.md).")
         await self.send({"type": "export", "bvh": bvh, "config": config.resolved_yaml(header),
-                         "name": config.name})
+                         "name": config.name, "steps": steps})
 
     # -- handing out steps --------------------------------------------------------------------
     async def _hand_out(self) -> None:

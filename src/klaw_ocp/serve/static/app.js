@@ -137,6 +137,7 @@ function receive(m) {
     // the joint positions come in whole millimetres (integers are the cheapest JSON to write)
     m.frames.points = m.frames.points.map((frame) => frame.map((mm) => mm / 1000));
     steps.set(m.index, m);
+    $("download-bvh").disabled = $("download-config").disabled = false;    // the walk so far
     $("planned-step").textContent = m.planned.step;
     state.planned.push(m.planned);
     $("planned-cadence").textContent = m.planned.step_frequency.toFixed(1);
@@ -153,11 +154,10 @@ function receive(m) {
     $("status").textContent = "stopping at rest…";
   } else if (m.type === "ended") {
     walkEnded = true;
-    $("download-bvh").disabled = $("download-config").disabled = false;
   } else if (m.type === "failed") {
     walkEnded = true; showRefusal("message", m.message);
   } else if (m.type === "export") {
-    state.exported = { file: wanted, bvh_chars: m.bvh.length, config_chars: m.config.length };
+    state.exported = { file: wanted, steps: m.steps, bvh_chars: m.bvh.length, config_chars: m.config.length };
     if (wanted === "bvh") download("walk.bvh", m.bvh, "text/plain");
     else download(`${m.name}.yaml`, m.config, "application/yaml");
   }
