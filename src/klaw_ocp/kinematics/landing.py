@@ -73,12 +73,21 @@ def starting_rates(foot, hip, hip_velocity) -> np.ndarray:
     over a step of _RATE_STEP, the rocker's pitch, the ankle turned about the heel and the leg's
     inverse kinematics as :meth:`.virtual_leg.StanceFoot.frames` has them, without the rest of
     the foot (the walk asks this at every heel strike)."""
-    t = np.array([0.0, _RATE_STEP])
+    return starting_rates_of(foot, np.array([foot.rocker_pitch]), np.array([foot.rocker_rate]), hip, hip_velocity)[0]
+
+
+def starting_rates_of(foot, pitches: np.ndarray, rates: np.ndarray, hip, hip_velocity) -> np.ndarray:
+    """:func:`starting_rates` (n, 3) of the feet that are ``foot`` but for their heel-strike pitch
+    ``pitches`` (n,) and rocker rate ``rates`` (n,): every knee the landing search tries, in one
+    pass of the same element-wise operations."""
+    n = len(pitches)
+    t = np.tile([0.0, _RATE_STEP], n)
     hips = np.asarray(hip, float) + t[:, None] * np.asarray(hip_velocity, float)
-    pitch = rocker_pitch(t, foot.t_flat, foot.rocker_pitch, foot.rocker_rate)
+    pitch = rocker_pitch(t, foot.t_flat, np.repeat(pitches, 2), np.repeat(rates, 2))
     theta3, theta4, _ = leg_ik(foot.foot.body, hips, foot.foot.ankle_at(pitch, foot.meta_off_theta6))
     theta5 = ankle_angle(theta3, theta4, -pitch)
-    return np.array([theta3[1] - theta3[0], theta4[1] - theta4[0], theta5[1] - theta5[0]]) / _RATE_STEP
+    q = np.stack([theta3, theta4, theta5], axis=1).reshape(n, 2, 3)
+    return (q[:, 1] - q[:, 0]) / _RATE_STEP
 
 
 def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> float:
@@ -98,31 +107,35 @@ def _least_largest(at_zero: np.ndarray, slope: np.ndarray, most: float) -> float
     return float(r[best])
 
 
-def least_landing_knee(make_foot, hip, hip_velocity, usable: bool = True):
+def least_landing_knee(make_foot, poses, hip, hip_velocity, usable: bool = True):
     """The stance foot of the least knee flexion at heel strike tried whose thigh, knee and ankle
     start at most LANDING_JOINT_RATE; if none does, the one whose largest joint rate is least.
     ``make_foot(knee, rate)`` builds the foot landing with that knee flexion (rad), its pitch
     starting at ``rate`` (rad/s; None: the rate that keeps the hip-ankle distance still, capped at
-    LANDING_FOOT_RATE for a bent knee), and has that rate as ``rocker_rate``. A straight leg must
-    start at the rate that holds its length; a bent one starts at the rate, at most that one, that
-    keeps the largest joint rate least. ``usable`` False (no rocker to measure) takes the straight
-    leg."""
+    LANDING_FOOT_RATE for a bent knee), and has that rate as ``rocker_rate``; ``poses(knees)``
+    gives those feet's heel-strike pitches and capped still-length rates (n,) each. A straight leg
+    must start at the rate that holds its length; a bent one starts at the rate, at most that one,
+    that keeps the largest joint rate least. ``usable`` False (no rocker to measure) takes the
+    straight leg. Every bent knee is tried in one pass (:func:`starting_rates_of`): the fast walks
+    that need one (7-9 km/h) tried them one by one at 10 ms a step."""
     straight = make_foot(0.0, None)
     if not usable:
         return straight
     best = (float(np.max(np.abs(starting_rates(straight, hip, hip_velocity)))), 0.0, None)
     if best[0] <= LANDING_JOINT_RATE:
         return straight
-    for k in range(1, int(round(LANDING_KNEE_MAX / LANDING_KNEE_STEP)) + 1):
-        knee = k * LANDING_KNEE_STEP
-        capped = make_foot(knee, None)
-        most = capped.rocker_rate
-        at_zero = starting_rates(make_foot(knee, 0.0), hip, hip_velocity)
-        slope = (starting_rates(capped, hip, hip_velocity) - at_zero) / most if most > 0 else np.zeros(3)
-        rate = _least_largest(at_zero, slope, most)
-        foot = make_foot(knee, rate)
-        largest = float(np.max(np.abs(starting_rates(foot, hip, hip_velocity))))   # (the lines are a model)
-        if largest <= LANDING_JOINT_RATE:
-            return foot
-        best = min(best, (largest, knee, rate))
+    knees = np.arange(1, int(round(LANDING_KNEE_MAX / LANDING_KNEE_STEP)) + 1) * LANDING_KNEE_STEP
+    pitches, most = poses(knees)
+    at_zero = starting_rates_of(straight, pitches, np.zeros(len(knees)), hip, hip_velocity)
+    capped = starting_rates_of(straight, pitches, most, hip, hip_velocity)
+    slope = np.where(most[:, None] > 0, (capped - at_zero) / np.where(most > 0, most, 1.0)[:, None], 0.0)
+    rates = np.array([_least_largest(a, b, m) for a, b, m in zip(at_zero, slope, most)])
+    # (the lines are a model: each foot's rates measured again)
+    largest = np.max(np.abs(starting_rates_of(straight, pitches, rates, hip, hip_velocity)), axis=1)
+    within = np.flatnonzero(largest <= LANDING_JOINT_RATE)
+    if within.size:
+        k = int(within[0])
+        return make_foot(float(knees[k]), float(rates[k]))
+    k = int(np.argmin(largest))
+    best = min(best, (float(largest[k]), float(knees[k]), float(rates[k])))
     return make_foot(best[1], best[2])

@@ -135,16 +135,22 @@ class StanceFoot:
         poses = {0.0: landing_pitch(body, ankle_x, hip, body.l1, hip_velocity)}
         straight_pitch = poses[0.0][0]
 
-        def landing(knee: float, rate: float | None) -> "StanceFoot":
+        def pose(knee: float) -> tuple[float, float]:
             if knee not in poses:
                 pitch, still = landing_pitch(body, ankle_x, hip, float(reach_for_knee_flexion(body, knee)), hip_velocity)
                 poses[knee] = pitch, min(still, LANDING_FOOT_RATE)
-            pitch, still = poses[knee]
+            return poses[knee]
+
+        def landing(knee: float, rate: float | None) -> "StanceFoot":
+            pitch, still = pose(knee)
             rate = still if rate is None else rate
             return cls(FlatFoot(body, ankle_x), pitch, math.radians(attrs.theta6_impact), t_flat,
                        math.radians(attrs.heel_off_theta5), math.radians(attrs.meta_off_theta6), t_step,
                        rocker_rate=rate, landing_knee=knee, **schedule)
-        return least_landing_knee(landing, hip, hip_velocity, usable=straight_pitch < 0 and t_flat > 0)
+
+        def landings(knees: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return tuple(np.array(column) for column in zip(*(pose(float(knee)) for knee in knees)))
+        return least_landing_knee(landing, landings, hip, hip_velocity, usable=straight_pitch < 0 and t_flat > 0)
 
     @classmethod
     def standing(cls, body: Body, attrs, ankle_x: float, t_step: float, t_ds_next: float | None = None) -> "StanceFoot":
