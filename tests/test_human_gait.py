@@ -50,19 +50,50 @@ from klaw_ocp.walk import simulate_walk                          # noqa: E402
 STEPS = 6
 
 
-def _figures(speed, height=1.8):
+def _walk(speed, height=1.8):
+    """The walk and its body at 200 fps."""
     walk = simulate_walk({"name": "h", "body": {"height": height, "mass": 80},
                           "walk": {"speed": speed, "steps": STEPS}})
     assert walk.status == "ok"
-    figures = human_figures(walk, body_motion(walk, 200.0))
+    return walk, body_motion(walk, 200.0)
+
+
+def _figures(speed, height=1.8, walked=None):
+    walk, motion = walked or _walk(speed, height)
+    figures = human_figures(walk, motion)
     assert len(figures.cycles) >= 2
     return figures
 
 
 @pytest.fixture(scope="module")
-def people():
+def walks():
+    """speed (km/h) -> (the natural walk (1.8 m) at that speed, its body at 200 fps)."""
+    return {speed: _walk(speed) for speed in (3.0, 5.0, 6.0)}
+
+
+@pytest.fixture(scope="module")
+def people(walks):
     """speed (km/h) -> HumanFigures of the natural walk's body (1.8 m) at that speed."""
-    return {speed: _figures(speed) for speed in (3.0, 5.0, 6.0)}
+    return {speed: _figures(speed, walked=walks[speed]) for speed in walks}
+
+
+@pytest.mark.parametrize("speed", [3.0, 5.0, 6.0])
+def test_the_swing_knee_comes_into_swing3_without_a_rate_jump(walks, speed):
+    """Issue #36: at 100 fps no frame-to-frame rate jump of the swing knee above 100 deg/s within
+    50 ms of swing3's start, where the dynamics lock the straightened knee (eq. 5) and the body's
+    leg bends into the next stance's landing posture: the distance blends in as the square of the
+    smoothstep, so the knee (the square root of the distance's shortfall near straight) starts
+    bending at rest (a smooth distance started it at a finite rate: 115-130 deg/s jumps)."""
+    from klaw_ocp.body_motion.skeleton import ANGLE_NAMES
+    walk, motion = walks[speed]
+    worst = 0.0
+    for step in walk.steps[2:-1]:
+        knee = ANGLE_NAMES.index(f"{'l' if step.index % 2 == 0 else 'r'}_knee_flexion")
+        t2 = step.t_start + float(step.subphase("swing3").t[0])
+        t = np.arange(math.ceil((t2 - 0.05) * 100), math.floor((t2 + 0.05) * 100) + 1) / 100
+        angle = np.interp(t, motion.t, np.degrees(motion.angles[:, knee]))
+        worst = max(worst, float(np.abs(np.diff(angle, 2)).max() * 100))
+    assert worst <= 100.0
 
 
 def test_late_stance_at_5_kmh(people):

@@ -57,7 +57,10 @@ def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, lan
     lands = smoothstep((tau - t2) / np.maximum(t_hs - t2, 1e-12))
     towards = ankle + leaves[:, None] * toe_off[0][step] + lands[:, None] * landing[0][step] - own_hip
     reached = np.hypot(*towards.T)
-    distance = dynamic + np.maximum(leaves, lands) * (reached - dynamic)
+    # swing3's leg comes in straight (eq. 5's lock), where the knee goes as the square root of the
+    # distance's shortfall: the distance blends in as lands², so the knee starts bending at rest
+    # (as lands, a smooth distance started the knee at a finite rate: a 70-110 deg/s jump at t2)
+    distance = dynamic + np.maximum(leaves, lands * lands) * (reached - dynamic)
     turn = leaves * toe_off[1][step] + lands * landing[1][step]
     return shank + turn, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
 
