@@ -20,11 +20,16 @@ the body and are back at about neutral from mid-swing to heel strike (docs/human
 
   - **the foot the body shows relaxes with the knee** (``knee`` given): it keeps θ5_t1's
     dorsiflexion in proportion to the knee's flexion, θ5 = θ5_hs + (θ5_t1 - θ5_hs)·S(θ4/θ4(t1)),
-    S = 10s³ - 15s⁴ + 6s⁵, s clipped to [0, 1]. While the knee is flexed (the shank behind the
+    S = 3s² - 2s³, s clipped to [0, 1]. While the knee is flexed (the shank behind the
     vertical, the toe low) the foot stays up; as the extending knee swings the shank forward
     under the body the foot comes back towards neutral with it, and reaches the attribute as the
     knee reaches full extension at t2 at rest (swing2's final conditions; S's flat ends), so its
-    rate never jumps. Held at its t1 angle into swing2 instead, the heel met the ground as the
+    rate never jumps. S is the cubic, not the quintic smootherstep: the knee extends at up to
+    500°/s in swing2, and S'' times its rate squared is the foot's acceleration there; the
+    quintic's larger curvature mid-range (5.8 against 3.6 at s = 0.8) made the swing ankle's
+    largest rate jump 117°/s at 100 fps at 5 km/h (now under 100). The cubic's acceleration
+    step at t1 is small (S''(1) times the knee's slow rate there: about 25°/s at 100 fps), and at
+    t2 the knee is at rest. Held at its t1 angle into swing2 instead, the heel met the ground as the
     knee straightened, and the ground guard had to turn the foot by about 17° in 50 ms (rate
     jumps of 350-400°/s at 5 km/h);
   - **the foot swing2's toe-clearance path constrains** (no ``knee``): held through the first half
@@ -35,9 +40,9 @@ the body and are back at about neutral from mid-swing to heel strike (docs/human
     thigh forward at 3-30 N m/kg (docs/human-gait.md); there the body's ground guard turns the
     foot and lifts the ankle.
 
-  Held from then on, so the foot lands at eq. 3's angle with no rotation left. Every piece of the
-  body's foot starts and ends with zero acceleration (C2): the cubic smoothstep's acceleration
-  steps, which the constrained foot keeps, were rate jumps of 190-320°/s between frames at 100 fps;
+  Held from then on, so the foot lands at eq. 3's angle with no rotation left. Swing1's curve
+  starts and ends with zero acceleration (C2): the cubic smoothstep's acceleration steps in time,
+  which the constrained foot keeps, were rate jumps of 190-320°/s between frames at 100 fps;
 - θ6 (toe): from its toe-off value (the meta-off limit) to the heel-strike attribute over swing1.
 
 Where the schedule would put the toe or the heel into the ground, the foot the body shows after
@@ -83,7 +88,8 @@ def schedule_angles(t, s: dict, clip, knee=None):
     else:
         # in swing2 as much as the knee keeps of its flexion at t1, none from t2 on: steps in t
         # where both sides agree (the knee is at theta4_t1 at t1 and straight at t2)
-        with_knee = _smootherstep(clip(knee / s["theta4_t1"], 0.0, 1.0))
+        u = clip(knee / s["theta4_t1"], 0.0, 1.0)
+        with_knee = u * u * (3 - 2 * u)      # (the cubic smoothstep: see the module docstring)
         kept = 1 - (t > s["t1"]) * (1 - (t < s["t2"]) * with_knee)
     theta5 = (s["theta5_heel_strike"] + (s["theta5_t1"] - s["theta5_heel_strike"]) * kept
               + (s["theta5_toe_off"] - s["theta5_t1"]) * (1 - smooth1) + s["theta5_rate_toe_off"] * span1 * rising)
