@@ -35,8 +35,8 @@ from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames
 from .solvers import make_solver
 from .solvers.kernels import compile_seconds
-from .step_loop import StepLoop
 from .solvers.thread_safety import solving
+from .step_loop import StepLoop
 from .stop_signals import stopped_words
 
 
