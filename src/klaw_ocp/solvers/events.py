@@ -239,7 +239,7 @@ class EventIntegrator:
             gm = float(kernels.events(kernels.step(x0, t0, m, u, c)[0], t0 + m, u, c)[0][e])
             if abs(gm) < 1e-13 or b - a < 1e-14:
                 return m
-            if gm * ga < 0:
+            if np.sign(gm) * np.sign(ga) < 0:     # (signs: a diverging trial's gm * ga overflows)
                 b, gb = m, gm
             else:
                 a, ga = m, gm
