@@ -250,16 +250,18 @@ def eq2_timings(step_frequency_spm: float, swing1_fraction=0.5, swing2_fraction=
             "t2": t_ds + swing2_fraction * t_swing}
 
 
-def eq3_landing(body, step_length: float, theta5_impact_deg: float, pelvic_rotation_deg: float = 0.0) -> dict:
+def eq3_landing(body, step_length: float, theta5_impact_deg: float, pelvic_rotation_deg: float = 0.0,
+                hip_lead: float = 0.0) -> dict:
     """Eq. 3's heel-strike posture, computed here from the body and the step alone: the landing
     heel (relative to the stance ankle's x), the stance hip (relative to the stance ankle) and the
     landing leg's hip, the pelvis's other one, l0 sin(rotation) ahead of it at the same height
-    (each leg spans half of the step less that)."""
+    (each leg spans half of the step less that), the stance hip ``hip_lead`` of the step ahead of
+    half-way (the attribute heel_strike_hip_lead; 0 in the paper)."""
     l1, l8, l9, l11 = body.l1, body.l8, body.l9, body.l11
     omega8 = math.acos(l8 / l11)
     r = math.sqrt(l1 ** 2 + l11 ** 2 - 2 * l1 * l11 * math.cos(math.radians(theta5_impact_deg) + omega8))
     shift = body.l0 * math.sin(math.radians(pelvic_rotation_deg)) if step_length > 0 else 0.0
     heel_x = step_length - l8
-    hip_x = (step_length - shift) / 2
+    hip_x = (step_length - shift) / 2 + (hip_lead * step_length if step_length > 0 else 0.0)
     hip_y = math.sqrt(r ** 2 - (heel_x - hip_x - shift) ** 2)
     return {"heel_x": heel_x, "hip": np.array([hip_x, hip_y - l9]), "landing_hip": np.array([hip_x + shift, hip_y - l9])}

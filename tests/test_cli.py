@@ -37,7 +37,8 @@ def test_plan_speed_json(capsys):
     assert STEP_KEYS <= set(step)
     assert step["step_length_m"] == pytest.approx(0.7746, abs=1e-4)
     assert step["step_frequency_spm"] == pytest.approx(107.58, abs=5e-3)
-    assert step["w_m"] == pytest.approx(0.896, abs=1e-3)
+    assert step["w_m"] == pytest.approx(0.922, abs=1e-3)
+    assert step["hip_lead_m"] == pytest.approx(0.045 * step["step_length_m"])
     assert step["t_stance_s"] == pytest.approx(step["t_step_s"] + step["t_ds_s"])
 
 
@@ -56,8 +57,8 @@ def test_plan_human_output_lists_parameters_timings_constraints(capsys):
     code, out, _ = run_main(capsys, "plan", "--speed", "5")
     assert code == 0
     for text in ("Locomotion parameters (eq. 1)", "107.58", "State-phase timings (eq. 2)",
-                 "t_ds", "Step constraints at heel strike (eq. 3)", "0.8956", "0.4394", "-0.4134",
-                 "landing hip ahead by", "0.0126"):
+                 "t_ds", "Step constraints at heel strike (eq. 3)", "0.9218", "0.4680", "-0.3740",
+                 "landing hip ahead by", "0.0126", "hip ahead of mid-step", "0.0349"):
         assert text in out
 
 

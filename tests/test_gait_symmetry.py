@@ -89,6 +89,67 @@ def test_unreachable_step_is_a_gait_limit():
         step_constraints(BODY, 2.5)
 
 
+@pytest.mark.parametrize("lead", [0.0, 0.045, 0.1])
+@pytest.mark.parametrize("rotation", [0.0, 4.0])
+def test_the_step_length_limit_is_where_the_hip_reaches_ankle_height(lead, rotation):
+    """The limit the message names is exact: a hair below it the landing leg reaches the ground
+    with the hip above the stance ankle, a hair above it not."""
+    shift = BODY.l0 * math.sin(math.radians(rotation))
+    with pytest.raises(GaitLimitError) as err:
+        step_constraints(BODY, 3.0, hip_shift=shift, hip_lead=lead)
+    limit = float(str(err.value).split("allowed below ")[1].split(" m")[0])
+    c = step_constraints(BODY, limit * (1 - 1e-3), hip_shift=shift, hip_lead=lead)
+    assert c.hip_y == pytest.approx(BODY.l9, abs=0.05)
+    with pytest.raises(GaitLimitError):
+        step_constraints(BODY, limit * (1 + 1e-3), hip_shift=shift, hip_lead=lead)
+
+
+@settings(max_examples=60, deadline=None)
+@given(height=st.floats(1.4, 2.1), rel=st.floats(0.3, 1.2), lead=st.floats(0.0, 0.1), rotation=st.floats(0.0, 8.0))
+def test_the_hip_lead_moves_the_hip_ahead_and_up_and_the_next_stance_starts_from_it(height, rel, lead, rotation):
+    """The hip is lead·sl ahead of where eq. 3 puts it, higher (the landing leg spans less), the
+    landing heel where eq. 3 puts it; the next stance starts at the landing hip seen from its own
+    ankle (what the heel-strike map gives), the mirror of this stance's end only without a lead."""
+    body = Body(height, 75)
+    sl = rel * body.l1
+    shift = body.l0 * math.sin(math.radians(rotation))
+    paper = step_constraints(body, sl, ankle_x=1.0, hip_shift=shift)
+    c = step_constraints(body, sl, ankle_x=1.0, hip_shift=shift, hip_lead=lead)
+    assert c.hip_lead == pytest.approx(lead * sl, abs=1e-15)
+    assert c.hip_x == pytest.approx(paper.hip_x + lead * sl, abs=1e-12)
+    assert c.hip_y >= paper.hip_y - 1e-12 and c.w >= paper.w - 1e-12
+    if shift == 0:      # (the closure check reads the one-hip model's landing hip)
+        _check_closure(body, c, sl, 1.0)
+    hip = (c.landing_hip_x - c.next_ankle_x, c.hip_y - c.ankle_y)
+    assert c.landing_w == pytest.approx(math.hypot(*hip), abs=1e-12)
+    assert c.landing_theta1 == pytest.approx(math.atan2(*hip), abs=1e-12)
+    assert paper.landing_w == pytest.approx(paper.w, abs=1e-12)
+    assert paper.landing_theta1 == pytest.approx(-paper.theta1, abs=1e-12)
+    if lead > 1e-3:
+        assert c.landing_w < c.w and abs(c.landing_theta1) < c.theta1
+
+
+@pytest.mark.parametrize("lead", [0.5, float("nan"), "0.1"])
+def test_bad_hip_lead(lead):
+    with pytest.raises(ConfigError, match=r"^hip_lead: got "):
+        step_constraints(BODY, 0.7, hip_lead=lead)
+
+
+def test_the_plan_leads_by_the_attribute_from_free_speed_and_in_proportion_below():
+    """heel_strike_hip_lead whole from a dimensionless speed of 0.45 (5 km/h at 1.8 m), in
+    proportion to it below, none in a closing step."""
+    from klaw_ocp.gait.plan import HIP_LEAD_FULL_SPEED, closing_step, heel_strike_hip_lead, plan_steps
+    attrs = LocomotionAttributes.defaults()
+    full = attrs.heel_strike_hip_lead
+    v_full = HIP_LEAD_FULL_SPEED * math.sqrt(BODY.g * (BODY.l1 + BODY.l9)) * 3.6
+    assert 4.9 < v_full < 5.1
+    assert heel_strike_hip_lead(BODY, attrs, 6.0) == full
+    assert heel_strike_hip_lead(BODY, attrs, v_full / 2) == pytest.approx(full / 2, rel=1e-12)
+    plans = plan_steps(BODY, {"speed": 3.0}, n_steps=2, attributes=attrs)
+    assert plans[1].constraints.hip_lead == pytest.approx(full * 3.0 / v_full * plans[1].constraints.step_length)
+    assert closing_step(BODY, attrs, plans[-1]).constraints.hip_lead == 0.0
+
+
 def test_bad_ankle_x():
     with pytest.raises(ConfigError, match=r"^ankle_x: got nan"):
         step_constraints(BODY, 0.7, ankle_x=float("nan"))

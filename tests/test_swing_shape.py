@@ -67,9 +67,11 @@ def test_the_thigh_is_at_its_peak_at_t1(walk):
 
 def test_the_thigh_holds_in_swing2(walk):
     """§4.3: in swing2 the hip angle "stays fairly constant". It no longer swings past its target
-    (by 0.10 rad when only theta3(t1) was imposed); the knee's extension pulls it back by up to
-    7° at 5 km/h against the holding spring (1.5 Hz, critically damped), which swing3 returns by
-    heel strike."""
+    (by 0.10 rad when only theta3(t1) was imposed); the knee's extension pulls it back by about
+    4° in steady steps at 5 km/h against the holding spring (1.5 Hz, critically damped), which
+    swing3 returns by heel strike. The first step from rest, whose swing starts beside the stance
+    foot, drifts most: 8.5° (6.4° before the hip led at heel strike, when the recovery loop had
+    also moved its held angle 10° forward; with the lead its toe clears without it)."""
     for step in walk.steps:
         s2 = step.subphase("swing2")
         theta3 = s2.states[:, 6]
@@ -79,7 +81,8 @@ def test_the_thigh_holds_in_swing2(walk):
         assert theta3.min() >= target - 1e-6, step.index               # never past it forward
         # the drift back is measured from where swing1 left the thigh: with the recovery
         # actuator (a first step from rest) the held angle itself moved forward
-        assert theta3.max() - theta3[0] <= math.radians(8), step.index
+        first_from_rest = step.index == 0 and walk.spec.start_from_rest
+        assert theta3.max() - theta3[0] <= math.radians(9 if first_from_rest else 5), step.index
 
 
 def test_the_knee_arrives_straight_at_rest_and_locks_without_an_impact(walk):
@@ -120,25 +123,26 @@ def test_the_knee_is_extending_at_t1_at_the_asked_rate(walk):
         s2 = step.subphase("swing2")
         asked = -share * s2.states[0][7] / (s2.t[-1] - s2.t[0])
         # (the plan takes the hip's velocity from the stance's node at t1, the swing re-simulates
-        # it: they agree to a few 1e-6, 5e-5 in a closing step)
-        assert asked < -1.0 and s2.states[0][9] == pytest.approx(asked, rel=1e-4), step.index
+        # it: they agree to a few 1e-5, 2e-4 in a closing step, which starts from a hip that led)
+        closing = walk.spec.end_at_rest and step is walk.steps[-1]
+        assert asked < -1.0 and s2.states[0][9] == pytest.approx(asked, rel=5e-4 if closing else 1e-4), step.index
 
 
 def test_swing1_falls_back_on_the_papers_curve_p_where_its_own_fails():
-    """A 1 km/h walk of a 1.5 m, 50 kg body starting mid-stride: multiple shooting's first swing1
+    """A 0.8 km/h walk of a 1.5 m, 50 kg body starting mid-stride: multiple shooting's first swing1
     does not converge from its cold guess on the sloped curve P, and is solved by continuation
     from the paper's flat-ended curve (control/step.py, solve_swing1); the summary says so, and
     the solution meets swing1's final conditions on the curve itself."""
     from klaw_ocp.control.step import CURVE_P_CONTINUATION
     w = simulate_walk({"name": "slow", "body": {"height": 1.5, "mass": 50},
-                       "walk": {"speed": 1.0, "steps": 2}, "solver": {"method": choices.MULTIPLE_SHOOTING}})
+                       "walk": {"speed": 0.8, "steps": 2}, "solver": {"method": choices.MULTIPLE_SHOOTING}})
     assert w.status == "ok", w.message
     first = w.steps[0].subphase("swing1")
     assert first.fallbacks[0] == CURVE_P_CONTINUATION
     assert [s.subphase("swing1").fallbacks for s in w.steps[1:]] == [[]] * (len(w.steps) - 1)
     theta3, theta3d = first.states[-1][6], first.states[-1][8]
     assert theta3 == pytest.approx(w.steps[0].plan.constraints.theta3, abs=1e-8) and abs(theta3d) <= RATE_TOL
-    # the knee extends at t1, though slower than asked: at 1 km/h the hip moves the ankle little,
+    # the knee extends at t1, though slower than asked: at 0.8 km/h the hip moves the ankle little,
     # and the curve's slope keeps to END_SLOPE_SHARE of the knee's own direction
     share = w.spec.attributes.knee_rate_at_t1
     s2 = w.steps[0].subphase("swing2")

@@ -33,10 +33,13 @@ from ..kinematics.swing_foot import SCHEDULE_FIELDS, SwingFoot, schedule_angles
 
 #: the largest angular acceleration (rad/s²) of the ground guard's turn away from the schedule
 #: (and of the knee's bend where it lifts the ankle): the turn is C1, so the foot's rate never
-#: jumps; at 100 fps 5000°/s² is a change of rate of 50°/s between frames, where people's smooth
-#: swing ankle and knee reach about 60. Its largest rate (rad/s; people's swing ankle moves at up
-#: to about 200-300°/s), and the grid it is computed on (s).
-GUARD_ACCELERATION = math.radians(5000)
+#: jumps; at 100 fps 3000°/s² is a change of rate of 30°/s between frames, where people's smooth
+#: swing ankle and knee reach about 60. It adds to the schedule's own: in early swing2 at 5 km/h
+#: the heel, under t1's dorsiflexed foot, meets the ground as the shank swings forward while the
+#: ankle relaxes with the knee at about 70°/s between frames; with 5000°/s² the sum was 122°/s.
+#: Its largest rate (rad/s; people's swing ankle moves at up to about 200-300°/s), and the grid
+#: it is computed on (s).
+GUARD_ACCELERATION = math.radians(3000)
 GUARD_RATE = math.radians(400)
 GUARD_GRID = 0.002
 

@@ -4,7 +4,7 @@ A walk that does not start from rest begins where its first step would hand its 
 itself: the stance state at heel strike that the step's stance and its heel-strike map (onto the
 landing leg's own hip, the pelvis's other one) carry back to itself. :func:`periodic_start` finds
 it in two stages: the hip speed whose hip leaves the step as fast as it entered it (secant method
-on the mirror of eq. 3, a start near enough to the orbit for every stance to have a solution),
+from the landing posture of eq. 3, a start near enough to the orbit for every stance to have a solution),
 then the whole state by passes through the step with Anderson's mixing. The stance does not depend
 on the swing (assumption 4), so the orbit of the stance is the walk's.
 """
@@ -20,8 +20,9 @@ from .step import StepController, StepInput
 
 
 def _walking_state(con, speed: float, theta2: float) -> np.ndarray:
-    """Heel-strike stance state (mirror of eq. 3) with a horizontal hip velocity ``speed``."""
-    w, th = con.w, -con.theta1
+    """Heel-strike stance state (the landing leg's posture of eq. 3) with a horizontal hip velocity
+    ``speed``."""
+    w, th = con.landing_w, con.landing_theta1
     return np.array([w, th, theta2, speed * math.sin(th), speed * math.cos(th) / w, 0.0])
 
 
@@ -38,7 +39,7 @@ def periodic_start(controller: StepController, plan, inp: StepInput, tol: float 
     """The stance state at heel strike on the periodic orbit of the step ``plan``.
 
     First the hip speed whose hip leaves the step as fast as it entered it (secant method, from
-    the mirror of eq. 3 with the trunk at its reference and at rest): a start close enough to the
+    the landing posture of eq. 3 with the trunk at its reference and at rest): a start close enough to the
     orbit for every stance to have a solution. Then the whole state is carried through the step's
     stance and its heel-strike map (onto the landing leg's own hip, the pelvis's other one) until
     it repeats: theta2 and the trunk's rate, which the balance controller settles, and the hip's

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..body import DYNAMIC_PARAMETER_NAMES
 from ..dynamics.points import foot_points_sx
 from ..dynamics.stance import hip_kinematics_sx, stance_accelerations_sx
 from ..dynamics.swing import swing_accelerations_sx, swing_points
@@ -39,6 +40,17 @@ from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .layout import VectorLayout
 from .stance_law import STANCE_CONTEXT, STANCE_PARAMETERS, body_vector, stance_forces
 from .torques import decaying_exponential_about_mean, spring_damper
+
+#: Swing1's knee tracks curve P with a damped least-squares rate of its one equation
+#: g(θ3, θ4, hip) = ankle_y - P(ankle_x) (after Nakamura & Hanafusa 1986): θ̇4 = -(b g + g_θ3 θ̇3
+#: + g_h ḣ) g_θ4 / (g_θ4² + ε² exp(-(g_θ4/ε)⁴)). Where the shank swings tangent to the curve,
+#: g_θ4 -> 0 and the exact rate is unbounded: there the swing1 map was noisy, and closing steps
+#: had no solution to 1e-2 (plain shooting, 2-3.5 km/h, 1.5 and 1.8 m, heel_strike_hip_lead 0.06-0.1:
+#: 6 of 24 walks failed without the damping, none with it). With ε = 5 % of the shank (m/rad) the
+#: ankle leaves the curve for a moment there and the Baumgarte term brings it back. The damping
+#: fades out as |g_θ4| grows (exp(-16) at 2ε), so elsewhere the rate is the exact one and curve P's
+#: end slope still gives the knee its rate at t1 (a plain ε² changed it by 5 %).
+CURVE_P_KNEE_DAMPING_REL = 0.05
 
 #: the swing foot's schedule (kinematics/swing_foot.py), under these names in the swing context
 FOOT_CONTEXT = tuple(f"foot_{name}" for name in SCHEDULE_FIELDS)
@@ -116,7 +128,11 @@ def swing1_rhs(x, t, u, c):
     grad_h = ca.jacobian(constraint, h_sym)
     subs = lambda e: ca.substitute(ca.substitute(e, q_sym, ca.vertcat(th3, th4)), h_sym, hip)
     g_val, gq, gh = subs(constraint), subs(grad_q), subs(grad_h)
-    th4d = -(n.baumgarte * g_val + gq[0] * th3d + ca.mtimes(gh, hip_vel)) / gq[1]
+    # the damped least-squares rate (CURVE_P_KNEE_DAMPING_REL): bounded where the knee cannot move
+    # the ankle across the curve
+    damping = CURVE_P_KNEE_DAMPING_REL * body_vector(c)[DYNAMIC_PARAMETER_NAMES.index("l4")]
+    damped = damping ** 2 * ca.exp(-(gq[1] / damping) ** 4)
+    th4d = -(n.baumgarte * g_val + gq[0] * th3d + ca.mtimes(gh, hip_vel)) * gq[1] / (gq[1] ** 2 + damped)
     return ca.vertcat(stance_rates, th3d, th4d, th3dd)
 
 

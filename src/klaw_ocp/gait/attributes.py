@@ -93,6 +93,12 @@ _SPECS = [
     _spec("foot", "theta5_impact", "deg", 90.0, 60.0, 120.0,
           "§3 eq. 3: 'θ5 at impact is specified as one of the locomotion attributes'; ERRATA open "
           "choice: angle between leg axis and the foot's long axis, neutral ≈ 90°"),
+    _spec("foot", "heel_strike_hip_lead", "1", 0.045, 0.0, 0.1,
+          "§3 eq. 3 puts the hip half-way along the step at heel strike (0 here); how far ahead of "
+          "half-way it is, as a fraction of the step length, at dimensionless speeds of 0.45 and "
+          "more (5 km/h on a 1.8 m body; in proportion when slower): people's hip is nearer the "
+          "leading foot, their trailing foot already on its ball (the hip higher, the trailing heel "
+          "up: docs/human-gait.md, 'The hip ahead of mid-step'), " + _OURS),
     _spec("foot", "theta6_impact", "deg", 0.0, -30.0, 30.0,
           "§4.3: the metatarsal angle at heel strike is 'specified as locomotion attributes'"),
     _spec("foot", "foot_flat_fraction", "1", 0.08, 0.02, 0.2,
@@ -109,9 +115,10 @@ _SPECS = [
           "§4.2 heel-off period (what the foot does after heel-off is not in the paper): the least "
           "knee flexion of single support; where the flat foot would straighten the leg further the "
           "heel rises (people: about 5° in terminal stance), " + _OURS),
-    _spec("foot", "knee_flexion_lead", "1", 0.22, 0.05, 0.4,
+    _spec("foot", "knee_flexion_lead", "1", 0.24, 0.05, 0.4,
           "§4.2 heel-off and meta-off periods: when the knee starts flexing for push-off, as a "
-          "fraction of the cycle before toe-off (people: from about 40 % of the cycle), " + _OURS),
+          "fraction of the cycle before toe-off (people: from about 35-40 % of the cycle; 0.24 keeps "
+          "the trailing thigh at people's -18 to -20° at 5 km/h with the hip's lead), " + _OURS),
     _spec("foot", "toe_off_knee_flexion", "deg", 40.0, 5.0, 70.0,
           "§4.2 meta-off ends at toe-off, where swing1 starts; the knee flexion there, which fixes the "
           "foot's pitch (people: 35-40° at the end of pre-swing), " + _OURS),

@@ -78,6 +78,7 @@ class StepPlan:
             "ankle_x_m": c.ankle_x, "ankle_y_m": c.ankle_y,
             "heel_x_m": c.heel_x, "next_ankle_x_m": c.next_ankle_x,
             "r_m": c.r, "omega3_rad": c.omega3, "theta5_impact_rad": c.theta5,
+            "hip_lead_m": c.hip_lead,
         }
 
 
@@ -261,8 +262,27 @@ def plan_step(body: Body, attrs, i: int, p: LocomotionParameters, t_start: float
     timings = state_phase_timings(p.step_frequency_spm, attrs, field=f"walk.step[{i}].step_frequency")
     check_step_length(body, p, i)
     constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=ankle_x,
-                                   hip_shift=landing_hip_shift(body, attrs))
+                                   hip_shift=landing_hip_shift(body, attrs),
+                                   hip_lead=heel_strike_hip_lead(body, attrs, p.speed_kmh))
     return StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t_start)
+
+
+#: the dimensionless speed v / sqrt(g (l1 + l9)) from which the hip leads by the whole attribute
+#: ``heel_strike_hip_lead`` (0.45: 5 km/h on a 1.8 m body, about Schwartz et al.'s free speed);
+#: slower steps lead in proportion. People's trailing heel is up at the other heel strike because
+#: they push off; walking slowly they push off later and less. With the whole lead, a slow step's
+#: stance leg must extend again after it has locked at l1 (w > l1 at its heel strike), which left
+#: plain shooting's stance without a solution at 1 km/h on a 1.5 m body.
+HIP_LEAD_FULL_SPEED = 0.45
+
+
+def heel_strike_hip_lead(body: Body, attrs, speed_kmh: float) -> float:
+    """How far the hip is ahead of half-way along the step at heel strike, as a fraction of the
+    step (eq. 3 with our deviation, :mod:`klaw_ocp.gait.symmetry`): the attribute
+    ``heel_strike_hip_lead``, in proportion to the dimensionless speed below
+    :data:`HIP_LEAD_FULL_SPEED`."""
+    v_star = speed_kmh / 3.6 / math.sqrt(body.g * (body.l1 + body.l9))
+    return attrs.heel_strike_hip_lead * min(1.0, v_star / HIP_LEAD_FULL_SPEED)
 
 
 def landing_hip_shift(body: Body, attrs) -> float:

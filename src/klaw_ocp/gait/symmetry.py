@@ -20,6 +20,18 @@ reading gives w < l1 at heel strike, against the text's w > l1. The cosine law g
     θ1 = asin(sl / (2w))                              (stance leg, > 0: hip ahead of the ankle)
     θ3 = -ω3 - asin((x_nh - x_h) / r)                 (swing thigh, < 0: foot ahead of the hip)
 
+The hip's place along the step (our deviation, attribute ``heel_strike_hip_lead``, which
+:func:`klaw_ocp.gait.plan.heel_strike_hip_lead` scales for slow steps): eq. 3 puts
+the hip half-way, x_h = x_a + sl/2, both legs spanning the same distance. People's hip at heel
+strike is nearer the leading foot: the trailing foot already stands on its ball, which reaches
+further back, while the leading leg lands nearly straight. We put the hip ``lead`` = f·sl ahead of
+half-way. The landing leg then spans less of the step, so the hip is higher, and the trailing leg
+more; its foot, on its ball, pitches as a person's does (docs/human-gait.md, "The hip ahead of
+mid-step"). f = 0 is the paper's eq. 3. The stance leg at heel strike is then no longer the mirror
+of the next stance's start: ``landing_w`` and ``landing_theta1`` give the latter::
+
+    x_h = x_a + (sl - hip_shift)/2 + lead,   w = sqrt((y_h - y_a)² + (x_h - x_a)²)
+
 With a pelvis (§4.2, the determinants; :mod:`klaw_ocp.kinematics.pelvis`) the landing leg hangs
 from the pelvis's other hip, ``hip_shift`` = l0 sin ψ ahead of the stance hip at heel strike
 (pelvic rotation ψ, list 0 there). The symmetric step then gives each leg (sl - hip_shift)/2 of
@@ -33,9 +45,9 @@ hip - l1·(sin θ3, cos θ3) for a straight leg). For a compass gait without fee
 6); the foot makes |θ3| < θ1.
 
 Stance origin (ERRATA, open choice): the next stance leg's origin is its own flat-foot ankle at
-``next_ankle_x = x_a + sl``, i.e. the heel at heel strike plus l8. With it the next stance starts
-at the mirror image of the end of the previous one, and consecutive origins are exactly one step
-length apart.
+``next_ankle_x = x_a + sl``, i.e. the heel at heel strike plus l8. With it (and no hip lead) the
+next stance starts at the mirror image of the end of the previous one, and consecutive origins are
+exactly one step length apart.
 """
 from __future__ import annotations
 
@@ -67,6 +79,8 @@ class StepConstraints:
         theta5: ankle angle at impact used, rad.
         hip_shift: how far the landing leg's hip (the pelvis's other hip) is ahead of the stance
             hip at heel strike, m (0: the one-hip model).
+        hip_lead: how far the stance hip is ahead of half-way along the step, m (0: eq. 3's
+            symmetric step; ``heel_strike_hip_lead`` times sl).
     """
 
     step_length: float
@@ -83,6 +97,17 @@ class StepConstraints:
     next_ankle_x: float
     theta5: float
     hip_shift: float = 0.0
+    hip_lead: float = 0.0
+
+    @property
+    def landing_w(self) -> float:
+        """The next stance leg's length at this heel strike: the landing hip to the next origin."""
+        return math.hypot(self.hip_y - self.ankle_y, self.landing_hip_x - self.next_ankle_x)
+
+    @property
+    def landing_theta1(self) -> float:
+        """The next stance leg's angle at this heel strike (< 0: the hip behind its ankle)."""
+        return math.asin((self.landing_hip_x - self.next_ankle_x) / self.landing_w)
 
     @property
     def landing_hip_x(self) -> float:
@@ -101,8 +126,10 @@ def _finite(field: str, value, allowed: str, positive: bool) -> float:
 
 
 def step_constraints(body: Body, step_length, attributes: LocomotionAttributes | None = None,
-                     ankle_x=0.0, closing: bool = False, hip_shift: float = 0.0) -> StepConstraints:
-    """The heel-strike final conditions (w, θ1, θ3) of a step of length ``step_length`` (eq. 3).
+                     ankle_x=0.0, closing: bool = False, hip_shift: float = 0.0,
+                     hip_lead: float = 0.0) -> StepConstraints:
+    """The heel-strike final conditions (w, θ1, θ3) of a step of length ``step_length`` (eq. 3,
+    with the hip ``hip_lead`` of the step ahead of half-way).
 
     Args:
         body: anthropometry (l1, l8, l9, l11, ω8).
@@ -111,6 +138,9 @@ def step_constraints(body: Body, step_length, attributes: LocomotionAttributes |
         ankle_x: x of the stance origin ankle1 (the previous step's ``next_ankle_x``).
         hip_shift: the landing leg's hip ahead of the stance hip at heel strike (m, the pelvis's
             rotation; 0 in a closing step, whose feet end side by side).
+        hip_lead: how far the hip is ahead of half-way along the step, as a fraction of it (0: the
+            paper's eq. 3; :func:`klaw_ocp.gait.plan.heel_strike_hip_lead` gives a step's; 0 in a
+            closing step).
 
     Raises:
         ConfigError: sl is not a finite number > 0, or ankle_x is not finite.
@@ -133,23 +163,30 @@ def step_constraints(body: Body, step_length, attributes: LocomotionAttributes |
     omega3 = math.acos(max(-1.0, min(1.0, (l1 ** 2 + r2 - l11 ** 2) / (2.0 * l1 * r))))
 
     shift = 0.0 if closing else float(hip_shift)
-    half = 0.5 * (sl - shift)           # each leg's share of the step (the pelvis spans the rest)
+    # a closing step lands the feet side by side (sl = 0), where no hip lead is defined
+    lead_fraction = 0.0 if closing else _finite("hip_lead", hip_lead, "a finite number below 0.5", positive=False)
+    if lead_fraction >= 0.5:
+        raise ConfigError(out_of_range("hip_lead", lead_fraction, "a finite number below 0.5"))
+    lead = lead_fraction * sl
+    half = 0.5 * (sl - shift)           # each leg's share of a symmetric step (the pelvis spans the rest)
     x_nh = x_a + sl - l8
-    x_h = x_a + half
+    x_h = x_a + half + lead
     dx = x_nh - (x_h + shift)
     dy2 = r2 - dx ** 2
-    sl_max = 2.0 * (math.sqrt(max(0.0, r2 - y_a ** 2)) + l8) + shift  # hip would drop to ankle height
+    # the hip would drop to ankle height: dx = sqrt(r² - y_a²), solved for sl
+    sl_max = (math.sqrt(max(0.0, r2 - y_a ** 2)) + l8 + 0.5 * shift) / (0.5 - lead_fraction)
     if dy2 <= 0.0 or math.sqrt(dy2) <= y_a:
         raise GaitLimitError(f"walk.step_length: got {sl:.6g} m, allowed below {sl_max:.4g} m "
                              f"(eq. 3: the landing leg cannot reach the ground with the hip above "
                              f"the stance ankle at theta5_impact = {attrs.theta5_impact:g} deg)")
     y_h = math.sqrt(dy2)
-    w = math.hypot(y_h - y_a, half)
-    theta1 = math.asin(half / w)
+    w = math.hypot(y_h - y_a, half + lead)
+    theta1 = math.asin((half + lead) / w)
     theta3 = -omega3 - math.asin(dx / r)
     return StepConstraints(step_length=sl, w=w, theta1=theta1, theta3=theta3, r=r, omega3=omega3,
                            hip_x=x_h, hip_y=y_h, ankle_x=x_a, ankle_y=y_a, heel_x=x_nh,
-                           next_ankle_x=x_a + sl, theta5=th5, hip_shift=shift)
+                           next_ankle_x=x_a + sl, theta5=th5, hip_shift=shift,
+                           hip_lead=lead)
 
 
 def landing_heel(body: Body, c: StepConstraints) -> tuple[float, float]:

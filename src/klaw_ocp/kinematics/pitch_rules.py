@@ -42,10 +42,12 @@ REACH_FRACTION = 1 - 4e-3
 
 #: The half width (fraction of l1) of the blend by which the heel leaves the ground: the hip-ankle
 #: distance the leg keeps departs from the flat foot's with zero rate where the flat foot comes
-#: within this much of the knee schedule's reach and meets it this much beyond (about 2 x 4.3 mm at
-#: 1.8 m, 50-100 ms of the hip's travel): near the straight knee a millimetre of reach is degrees of
-#: knee, and the flat foot's knee extends fast into the schedule (2 x 1.7 mm: 170-270 deg/s jumps).
-HEEL_BLEND_REL = 5e-3
+#: within this much of the knee schedule's reach and meets it this much beyond (about 2 x 8.7 mm at
+#: 1.8 m, 100-200 ms of the hip's travel): near the straight knee a millimetre of reach is degrees of
+#: knee, and the flat foot's knee extends fast into the schedule (2 x 1.7 mm: 170-270 deg/s jumps;
+#: 2 x 4.3 mm: 120 deg/s at 6 km/h once the hip led at heel strike, its knee extending at 180 deg/s
+#: as the hip rose over the foot; 2 x 8.7 mm: 83 deg/s, the stance leg's largest at 100 fps).
+HEEL_BLEND_REL = 1e-2
 #: The width (rad) of the C1 blend by which the knee schedule overtakes a knee held at a θ5 heel-off.
 KNEE_HOLD_BLEND = np.radians(3.0)
 
