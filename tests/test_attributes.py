@@ -19,7 +19,7 @@ EXPECTED_DEFAULTS = {
     "theta5_impact": 90, "heel_strike_hip_lead": 0.045, "theta6_impact": 0, "foot_flat_fraction": 0.08, "heel_off_theta5": 105, "meta_off_theta6": 30,
     "terminal_stance_knee_flexion": 5, "knee_flexion_lead": 0.24, "toe_off_knee_flexion": 40, "toe_clearance": 0.015, "swing_peak_position": 0.3,
     "ankle_peak_height_rel": 0.20, "ankle_peak_height_speed_slope": 0.01,
-    "swing1_torque_time_constant": 1.0, "swing2_knee_time_constant": 4.0, "knee_rate_at_t1": 0.65,
+    "swing1_torque_time_constant": 1.0, "swing2_knee_time_constant": 4.0, "knee_rate_at_t1": 0.95,
     "terminal_swing_retraction": 0, "hip_hold_frequency": 1.5, "hip_hold_damping_ratio": 1.0, "leg_frequency": 3.0,
     "leg_damping_ratio": 0.3, "trunk_frequency": 1.5, "trunk_damping_ratio": 0.8,
     "trunk_lean": 0, "hip_height_gain": 10.0, "hip_height_rate_gain": 0.05,

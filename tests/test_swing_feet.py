@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from klaw_ocp.body_motion.swing_foot_guard import guard_grid, lifted_feet, lifted_foot, sole_heights
 from klaw_ocp.results import hip_offsets, swing_foot_clearance, swing_foot_clearances
@@ -81,12 +83,14 @@ def _per_step_clearance(body, step, hips):
 def test_the_swing_ankle_leaves_toe_off_at_the_stance_rate_and_is_neutral_from_mid_swing():
     """The schedule (kinematics/swing_foot.py, issues #34, #36): θ5 starts at its toe-off value
     with the stance ankle's rate (the push-off's plantarflexion runs on), reaches θ5_t1 at t1 at
-    rest, with zero acceleration (the body's foot is C2 there); the foot swing2's path constrains
-    holds it through the first half of swing2 and is back at the heel-strike angle by t2 at rest;
-    numpy and CasADi give the same numbers."""
+    rest, its acceleration never above SWING1_ANKLE_BRAKE (two constant accelerations, the first
+    that one: C1, the least peak a frame-to-frame rate jump sees); the foot swing2's path
+    constrains holds it through the first half of swing2 and is back at the heel-strike angle by
+    t2 at rest; numpy and CasADi give the same numbers."""
     import casadi as ca
 
-    from klaw_ocp.kinematics.swing_foot import SCHEDULE_FIELDS, SWING2_HOLD_FRACTION, SwingFoot, schedule_angles
+    from klaw_ocp.kinematics.swing_foot import (SCHEDULE_FIELDS, SWING1_ANKLE_BRAKE, SWING2_HOLD_FRACTION, SwingFoot,
+                                                schedule_angles)
     foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0, 0.9)
     h = 1e-5
     th5 = lambda t: float(foot.angles(np.array([t]))[0][0])
@@ -94,12 +98,13 @@ def test_the_swing_ankle_leaves_toe_off_at_the_stance_rate_and_is_neutral_from_m
     accel = lambda t: (th5(t + h) - 2 * th5(t) + th5(t - h)) / h ** 2
     assert th5(0.1) == pytest.approx(1.40) and (th5(0.1 + 1e-7) - th5(0.1)) / 1e-7 == pytest.approx(-5.0, rel=1e-4)
     assert min(th5(t) for t in np.linspace(0.1, 0.3, 201)) < 1.40 - 0.05       # plantarflexes on
-    assert th5(0.3) == pytest.approx(1.80) and rate(0.3) == pytest.approx(0.0, abs=1e-5)
+    arriving = (th5(0.3) - th5(0.3 - h)) / h
+    assert th5(0.3) == pytest.approx(1.80) and arriving == pytest.approx(0.0, abs=SWING1_ANKLE_BRAKE * h)
     hold = 0.3 + SWING2_HOLD_FRACTION * 0.15
     assert th5(hold) == pytest.approx(1.80) and th5(0.45) == pytest.approx(1.5708)
     assert rate(0.45) == pytest.approx(0.0, abs=1e-3) and th5(0.55) == pytest.approx(1.5708)   # (h x its acceleration step)
-    largest = max(abs(accel(t)) for t in np.linspace(0.11, 0.29, 37))
-    assert abs(accel(0.3 - 2e-4)) < 0.02 * largest and abs(accel(0.3 + 2e-4)) < 0.02 * largest
+    assert max(abs(accel(t)) for t in np.linspace(0.1 + 2 * h, 0.3 - 2 * h, 401)) <= SWING1_ANKLE_BRAKE * (1 + 1e-3)
+    assert accel(0.1 + 1e-3) == pytest.approx(SWING1_ANKLE_BRAKE, rel=1e-3)       # braking the push-off
     t = ca.SX.sym("t")
     values = {name: getattr(foot, name) for name in SCHEDULE_FIELDS}
     f = ca.Function("f", [t], [schedule_angles(t, values, lambda x, lo, hi: ca.fmin(ca.fmax(x, lo), hi))[0]])
@@ -129,3 +134,26 @@ def test_the_body_s_swing_ankle_relaxes_with_the_knee():
         assert th5(t) == pytest.approx(1.5708 + (1.80 - 1.5708) * r * r * (3 - 2 * r), abs=1e-12)
     assert th5(0.45 - 1e-9) == pytest.approx(1.5708, abs=1e-9) and abs(rate(0.45 - 2 * h)) < 1e-3
     assert th5(0.5) == pytest.approx(1.5708) and th5(0.55) == pytest.approx(1.5708)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(1.0, 2.2), st.floats(-12.0, 12.0), st.floats(-1.0, 1.0), st.floats(0.08, 0.5))
+def test_the_swing1_ankle_meets_both_ends_on_two_bounded_accelerations(theta0, rate0, travel, span):
+    """kinematics/swing_foot._swing1_ankle: from (θ0, the push-off's rate) to (θ1, at rest) in
+    ``span``, on two constant accelerations, neither above the larger of SWING1_ANKLE_BRAKE and the
+    symmetric solution's (the least peak acceleration that meets both ends), whatever the signs."""
+    from klaw_ocp.kinematics.swing_foot import SWING1_ANKLE_BRAKE, _swing1_ankle
+    theta1 = theta0 + travel
+    tau = np.linspace(0.0, span, 2001)
+    theta = _swing1_ankle(tau, span, theta0, rate0, theta1, np.clip)
+    assert theta[0] == pytest.approx(theta0, abs=1e-12) and theta[-1] == pytest.approx(theta1, abs=1e-9)
+    h = tau[1]
+    # the symmetric solution's acceleration, from both ends (with signs turned if the target is behind)
+    sign = 1.0 if 2 * travel - rate0 * span >= 0 else -1.0
+    r0, d = sign * rate0, sign * travel
+    linear = 2 * r0 * span - 4 * d
+    symmetric = (-linear + np.sqrt(linear ** 2 + 4 * span ** 2 * r0 ** 2)) / (2 * span ** 2)
+    bound = max(SWING1_ANKLE_BRAKE, symmetric)
+    assert (theta[1] - theta[0]) / h == pytest.approx(rate0, abs=bound * h + 1e-6)       # the push-off's rate
+    assert abs(theta[-1] - theta[-2]) / h <= 2 * bound * h + 1e-6                  # at rest at t1
+    assert np.abs(np.diff(theta, 2)).max() / h ** 2 <= bound * (1 + 1e-6) + 1e-6

@@ -140,12 +140,13 @@ _SPECS = [
           "§4.3: swing2 knee torque 'is a decaying exponential function'; time constant as a "
           "fraction of the swing2 duration (with the knee at rest at t2, a slow decay lets it "
           "extend softly), " + _OURS),
-    _spec("swing", "knee_rate_at_t1", "1", 0.65, 0.0, 1.8,
+    _spec("swing", "knee_rate_at_t1", "1", 0.95, 0.0, 1.8,
           "§4.3 curve P: the knee's extension rate at t1, set by curve P's slope at D, as a "
           "fraction of the mean rate swing2 extends it at (the paper's slope 0 leaves swing2 a "
-          "rest-to-rest extension, its knee torque's reaction pushing the held thigh back; 0.65 "
-          "is 230 deg/s at 5 km/h, where people's knee extends at 250-350 deg/s; at 2 swing2 "
-          "would only brake), " + _OURS),
+          "rest-to-rest extension, its knee torque's reaction pushing the held thigh back; 0.95 "
+          "is about 320 deg/s at 5 km/h, where people's knee extends at 250-350 deg/s; at 0.65 "
+          "swing2 started with a knee acceleration above 10000 deg/s^2, a rate jump over 100 "
+          "deg/s a frame at 100 fps; at 2 swing2 would only brake), " + _OURS),
     _spec("swing", "terminal_swing_retraction", "deg", 0.0, 0.0, 15.0,
           "§4.3: the hip angle 'reaches a maximum' at t1 and holds in swing2; how far that peak is "
           "ahead of the heel-strike angle (eq. 3), which swing3 retracts to, as people's thighs "
