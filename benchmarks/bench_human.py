@@ -80,6 +80,7 @@ FIGURES = (
     Figure("jump_foot", "  own leg at foot flat, heel-off, toe-off", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("jump_hind", "  hind leg at the other leg's heel strike", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("stance_jump", "stance leg rate jump (100 fps)", "deg/s", 0, 100, "<= 100", digits=0),
+    Figure("limb_jump", "legs and arms, away from heel strikes", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("hip_torque", "peak swing hip torque per kg", "N m/kg", 0, 1.0, "<= 1.0", digits=2),
     Figure("gvs_thigh", "GVS thigh (RMS vs normative)", "deg", 0, 8, "<= 8 (people ~5)", True),
     Figure("gvs_knee", "GVS knee", "deg", 0, 8, "<= 8 (people ~5)", True),
@@ -259,7 +260,7 @@ def measure(walk, fps: float) -> dict:
             vals["hip_torque"].append(abs(torque) / mass)
             torque_at.append((torque, subphase, t - steps[k].plan.timings.t_ds))
     human = human_figures(walk, bm, START_STEPS)
-    for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump"):
+    for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump", "limb_jump"):
         vals[key] = list(human.values[key])
     for var in GPS_VARIABLES:
         vals[f"gvs_{var}"] = [v for (side, name), v in human.gvs.items() if name == var]
@@ -371,6 +372,9 @@ def main(argv=None) -> int:
         if where:
             print(f"  {s:g} km/h: v* = {h.v_star:.3f}; largest stance-leg rate jump at 100 fps {where[0]:.0f} deg/s "
                   f"({where[1][0]}, {where[1][1]:.1f} % of its cycle)")
+        (jump, (name, when)) = h.values["limb_jump"][0], h.values["limb_jump_where"][0]
+        print(f"  {s:g} km/h: largest leg or arm rate jump at 100 fps, 45 ms or more after heel strikes, "
+              f"{jump:.0f} deg/s ({name}, t = {when:.2f} s)")
         if r["torque_at"]:
             f, sub, dt = max(r["torque_at"], key=lambda x: abs(x[0]))
             print(f"  {s:g} km/h: peak swing hip torque {f:+.0f} N m in {sub}, {1e3 * dt:.0f} ms after toe-off")

@@ -49,6 +49,12 @@ RATE_FPS = 100.0
 #: the rate-jump figure leaves out the leg's landing: the frames whose stencil reaches within this
 #: much (s) after the leg's own heel strike (the heel strike map, the foot coming down)
 LANDING_WINDOW = 0.03
+#: the angles :func:`limb_rate_jumps` checks, on both sides
+LIMB_JOINTS = ("hip", "knee", "ankle", "toe", "shoulder", "elbow")
+#: :func:`limb_rate_jumps` leaves out the frames whose stencil reaches within this much (s) after a
+#: heel strike (the impact, and the landing foot still coming down 30-40 ms after it at 6 km/h:
+#: the paper's telescope shortens at once) or reaches past one
+AFTER_HEEL_STRIKE = 0.045
 
 
 # ------------------------------------------------------------------------------------------
@@ -190,6 +196,7 @@ FIGURES = {
     "ankle_pf": ("ankle, most plantarflexed just after toe-off (+10 %)", "deg", (-25.0, -12.0)),
     "shoulder_range": ("shoulder flexion range", "deg", (30.0, 40.0)),
     "stance_jump": ("stance leg, largest rate jump at 100 fps (landing left out)", "deg/s", (0.0, 100.0)),
+    "limb_jump": ("legs and arms, largest rate jump at 100 fps away from heel strikes", "deg/s", (0.0, 100.0)),
 }
 
 
@@ -215,6 +222,34 @@ def stance_rate_jumps(motion, cycle: Cycle, fps: float = RATE_FPS) -> tuple[floa
         k = int(np.argmax(jump))
         if jump[k] > best[0]:
             best = (float(jump[k]), f"{p}_{joint}", float(cycle.percent(t[k + 1])))
+    return best
+
+
+def limb_rate_jumps(walk, motion, start_steps: int = START_STEPS, fps: float = RATE_FPS) -> tuple[float, str, float]:
+    """The largest frame-to-frame change of rate (deg/s) at ``fps`` of any angle of the legs and
+    arms (:data:`LIMB_JOINTS`, both sides) from the start of step ``start_steps`` to the last
+    step's heel strike, frames at multiples of 1/fps interpolated in the motion's (finer) frames,
+    leaving out the stencils that reach past a heel strike or start within AFTER_HEEL_STRIKE after
+    one (issue #36's "anywhere except at heel strikes"). Returns the jump, the angle, its time (s)."""
+    strikes = np.array([step.t_start for step in walk.steps])
+    if len(strikes) <= start_steps + 1:
+        return math.nan, "", math.nan
+    t = np.arange(math.ceil(strikes[start_steps] * fps), math.floor(strikes[-1] * fps) + 1) / fps
+    centre = t[1:-1, None]
+    since = np.where(centre >= strikes, centre - strikes, np.inf).min(axis=1)
+    until = np.where(centre < strikes, strikes - centre, np.inf).min(axis=1)
+    away = (since - 1 / fps > AFTER_HEEL_STRIKE - 1e-9) & (until > 1 / fps + 1e-9)
+    if not away.any():
+        return math.nan, "", math.nan
+    deg = np.degrees(motion.angles)
+    best = (0.0, "", math.nan)
+    for name, column in COL.items():
+        if name[:2] in ("l_", "r_") and name[2:].split("_")[0] in LIMB_JOINTS:
+            jump = np.abs(np.diff(np.interp(t, motion.t, deg[:, column]), 2)) * fps
+            jump[~away] = 0.0
+            k = int(np.argmax(jump))
+            if jump[k] > best[0]:
+                best = (float(jump[k]), name, float(t[k + 1]))
     return best
 
 
@@ -261,6 +296,9 @@ def human_figures(walk, motion, start_steps: int = START_STEPS) -> HumanFigures:
             out.gvs[(side, var)] = float(np.mean(np.sqrt(np.mean((rows - norm[var][0]) ** 2, axis=1))))
     if out.gvs:
         out.gps = float(np.sqrt(np.mean(np.square(list(out.gvs.values())))))
+    jump, name, when = limb_rate_jumps(walk, motion, start_steps)
+    out.values["limb_jump"] = [jump]
+    out.values["limb_jump_where"] = [(name, when)]
     return out
 
 
