@@ -102,6 +102,11 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         first = next(s["index"] for s in shown if abs(s["step_frequency"] - before) > 1.0)
         print(f"cadence changed on screen {first - on_screen} steps after the step on screen at the change")
         assert 1 <= first - on_screen <= 2, (on_screen, [round(s["step_frequency"]) for s in shown])
+        # the page asks for the next step a few deliveries' time before the step on screen ends
+        # (app.js needBeforeEnd), within its bounds whatever the machine's speed
+        lead = browser.execute_script("return window.klaw.need_before_end_s")
+        print(f"the page asks for the next step {1000 * lead:.0f} ms before the step on screen ends")
+        assert 0.06 <= lead <= 0.25
         assert browser.execute_script("return window.klaw.refusals.length") == 0
         # past the envelope: the CLI's one line under the slider, and the walk goes on
         browser.execute_script("""const s = document.getElementById("speed"); s.value = 11.5;

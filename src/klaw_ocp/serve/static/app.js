@@ -1,14 +1,24 @@
 // The playground's page: the panel, the websocket and the playback. The server sends each step
-// with its frames when the page asks for it, which it does NEED_BEFORE_END_S before the step on
-// screen ends: the next step is ready in time, and a change made before then reaches the walk
-// one step earlier than if it were asked for at the start of the step (docs/serve.md).
+// with its frames when the page asks for it, which it does shortly before the step on screen ends
+// (needBeforeEnd: a few times the server's recent delivery time): the next step is ready in time,
+// and a change made before then reaches the walk one step earlier than if it were asked for at
+// the start of the step (docs/serve.md).
 import { Scene } from "./scene.js";
 import { Strips } from "./strips.js";
 
 const $ = (id) => document.getElementById(id);
 const scene = new Scene($("scene"));
 const strips = new Strips($("strip-hip"), $("strip-torque"), $("strip-gait"), $("legend"));
-const NEED_BEFORE_END_S = 0.25;   // the server solves a step in 10-20 ms; a step lasts 0.35 s or more
+// how long before the step on screen ends the page asks for the next: NEED_MARGIN times the
+// slowest of the last NEED_HISTORY deliveries (ask to step received), within these bounds. The
+// later it asks, the later a change still reaches the step after the next; the server solves a
+// step in 10-20 ms, and a step lasts 0.35 s or more
+const NEED_BEFORE_END_MAX_S = 0.25, NEED_BEFORE_END_MIN_S = 0.06, NEED_MARGIN = 4, NEED_HISTORY = 8;
+let deliveries = [], askedAt = null;
+function needBeforeEnd() {
+  if (deliveries.length === 0) return NEED_BEFORE_END_MAX_S;
+  return Math.min(NEED_BEFORE_END_MAX_S, Math.max(NEED_BEFORE_END_MIN_S, NEED_MARGIN * Math.max(...deliveries)));
+}
 const SEND_EVERY_MS = 150;     // a dragged slider sends at most this often (the server's rate limit is higher)
 const ATTRIBUTE_LABELS = { pelvic_list: "pelvic list", pelvic_rotation: "pelvic rotation",
                            arm_swing_amplitude: "arm swing", toe_clearance: "toe clearance" };
@@ -128,7 +138,7 @@ function connect() {
 
 function receive(m) {
   if (m.type === "skeleton") {
-    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0;
+    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0; askedAt = null;
     walkEnded = false; state.ended = false; state.shown = []; state.planned = [];
     clearRefusals();
     $("download-bvh").disabled = $("download-config").disabled = true;
@@ -137,6 +147,11 @@ function receive(m) {
     // the joint positions come in whole millimetres (integers are the cheapest JSON to write)
     m.frames.points = m.frames.points.map((frame) => frame.map((mm) => mm / 1000));
     steps.set(m.index, m);
+    if (askedAt !== null && m.index === asked) {      // (steps 0 and 1 come unasked)
+      deliveries = [...deliveries, (performance.now() - askedAt) / 1000].slice(-NEED_HISTORY);
+      askedAt = null;
+      state.need_before_end_s = needBeforeEnd();
+    }
     $("download-bvh").disabled = $("download-config").disabled = false;    // the walk so far
     $("planned-step").textContent = m.planned.step;
     state.planned.push(m.planned);
@@ -183,8 +198,9 @@ function tick(now) {
   } else {
     walkTime += dt;
     const end = current.t_start + current.t_step;
-    if (!current.closing && asked <= current.index && walkTime >= end - NEED_BEFORE_END_S) {
+    if (!current.closing && asked <= current.index && walkTime >= end - needBeforeEnd()) {
       asked = current.index + 1;
+      askedAt = performance.now();
       send({ type: "need", step: asked });
     }
     if (walkTime >= end) {
