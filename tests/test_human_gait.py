@@ -126,14 +126,14 @@ def test_late_stance_at_5_kmh(people):
     assert -25 <= f.worst("ankle_pf", high=False) and f.worst("ankle_pf") <= -12
 
 
-@pytest.mark.parametrize("speed, most", [(3.0, 110.0), (5.0, 100.0), (6.0, 110.0)])
-def test_the_stance_leg_has_no_rate_jump(people, speed, most):
+@pytest.mark.parametrize("speed", [3.0, 5.0, 6.0])
+def test_the_stance_leg_has_no_rate_jump(people, speed):
     """At 100 fps no frame-to-frame rate jump above 100 deg/s in the stance leg's hip, knee and
-    ankle at 5 km/h, from 30 ms after its heel strike to its toe-off: foot flat, heel-off, meta-off
-    and the other leg's heel strike included. At 3 and 6 km/h the largest (96-101 deg/s) is the
-    landing's foot still coming down fast 40 ms after heel strike (the paper's telescope shortens
-    at once after impact, docs/body.md); the boundaries themselves stay under 70 deg/s."""
-    assert people[speed].worst("stance_jump") <= most
+    ankle, from 30 ms after its heel strike to its toe-off: foot flat, heel-off, meta-off and the
+    other leg's heel strike included. Measured 93 / 70 / 83 deg/s at 3 / 5 / 6 km/h, the largest at
+    3 and 6 km/h the landing's foot still coming down 30-40 ms after heel strike (the paper's
+    telescope shortens at once after impact, docs/body.md); 96-101 before the hip's lead."""
+    assert people[speed].worst("stance_jump") <= 100.0
 
 
 @pytest.mark.parametrize("speed", [3.0, 5.0, 6.0])
