@@ -81,6 +81,8 @@ FIGURES = (
     Figure("jump_hind", "  hind leg at the other leg's heel strike", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("stance_jump", "stance leg rate jump (100 fps)", "deg/s", 0, 100, "<= 100", digits=0),
     Figure("limb_jump", "legs and arms, away from heel strikes", "deg/s", 0, 100, "<= 100", digits=0),
+    Figure("hip_surge", "hip forward speed, range", "m/s", 0.2, 0.45, "about 0.36", digits=2),
+    Figure("hip_decel", "hip deceleration after heel strike", "m/s2", -3.4, 0, ">= -3.4", digits=1),
     Figure("hip_torque", "peak swing hip torque per kg", "N m/kg", 0, 1.0, "<= 1.0", digits=2),
     Figure("gvs_thigh", "GVS thigh (RMS vs normative)", "deg", 0, 8, "<= 8 (people ~5)", True),
     Figure("gvs_knee", "GVS knee", "deg", 0, 8, "<= 8 (people ~5)", True),
@@ -260,7 +262,8 @@ def measure(walk, fps: float) -> dict:
             vals["hip_torque"].append(abs(torque) / mass)
             torque_at.append((torque, subphase, t - steps[k].plan.timings.t_ds))
     human = human_figures(walk, bm, START_STEPS)
-    for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump", "limb_jump"):
+    for key in ("knee_mid", "knee_to", "thigh_min", "hip_range", "ankle_df", "ankle_pf", "stance_jump", "limb_jump",
+                "hip_surge", "hip_decel"):
         vals[key] = list(human.values[key])
     for var in GPS_VARIABLES:
         vals[f"gvs_{var}"] = [v for (side, name), v in human.gvs.items() if name == var]
@@ -347,7 +350,8 @@ def main(argv=None) -> int:
     print("-" * len(head))
     sections = {"knee_lr": "knee", "thigh_hs": "thigh and hip", "ankle_df": "ankle",
                 "pelvis_list": "pelvis", "arm_range": "arm", "foot_flat": "event timing (% of cycle)",
-                "jump_main": "smoothness (largest rate jump of any leg angle)", "hip_torque": "swing hip torque",
+                "jump_main": "smoothness (largest rate jump of any leg angle)", "hip_surge": "the hip's surge",
+                "hip_torque": "swing hip torque",
                 "gvs_thigh": "sagittal gait profile against the normative curves (docs/human-gait.md)"}
     for fig in FIGURES:
         if fig.key in sections:

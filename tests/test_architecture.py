@@ -27,7 +27,7 @@ ALLOWED = {
     "body_motion": {"kinematics", "dynamics", "gait", "body"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
-    "human_gait": BASE | {"results", "body_motion", "gait", "body"},
+    "human_gait": BASE | {"results", "body_motion", "dynamics", "gait", "body"},
     "result_files": BASE | {"results", "body_motion", "body", "package", "stop_signals"},
     "figures": BASE | {"result_files", "body_motion", "compare", "config_paths", "stop_signals"},
     "sweep_pool": BASE | {"stop_signals"},

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .body_motion.skeleton import ANGLE_NAMES
+from .dynamics import stance_hips
 
 #: the normative table (its header says where it comes from)
 NORMATIVE_CSV = Path(__file__).resolve().parent / "data" / "normative_sagittal_schwartz2008.csv"
@@ -197,6 +198,8 @@ FIGURES = {
     "shoulder_range": ("shoulder flexion range", "deg", (30.0, 40.0)),
     "stance_jump": ("stance leg, largest rate jump at 100 fps (landing left out)", "deg/s", (0.0, 100.0)),
     "limb_jump": ("legs and arms, largest rate jump at 100 fps away from heel strikes", "deg/s", (0.0, 100.0)),
+    "hip_surge": ("the hip's forward speed, range over the steady steps", "m/s", (0.2, 0.45)),
+    "hip_decel": ("the hip's forward acceleration, least in the first 150 ms after heel strike", "m/s²", (-3.4, 0.0)),
 }
 
 
@@ -253,6 +256,27 @@ def limb_rate_jumps(walk, motion, start_steps: int = START_STEPS, fps: float = R
     return best
 
 
+def hip_surge(walk, start_steps: int = START_STEPS, after_heel_strike: float = 0.15) -> tuple[float, float]:
+    """The stance hip's forward speed (m/s) over the steps from ``start_steps`` on: its range, and
+    its least rate of change (m/s²) within ``after_heel_strike`` s of each heel strike (issue #36:
+    "the hip surges"; people: about 0.36 m/s peak to peak at 5 km/h, above -3.4 m/s²). From the
+    stance states on every subphase's grid (the swings re-simulate the stance: a finer grid than
+    the stance's own), by :func:`klaw_ocp.dynamics.stance_hips`."""
+    body, speeds, decel = walk.spec.body, [], []
+    for step in walk.steps[start_steps:]:
+        t = np.concatenate([sub.t for sub in step.subphases])
+        x = np.vstack([sub.states[:, :6] for sub in step.subphases])
+        t, first = np.unique(t, return_index=True)
+        v = stance_hips(body, x[first], np.zeros(2))[1][:, 0]
+        speeds.append(v)
+        early = t <= after_heel_strike
+        if early.sum() >= 2:
+            decel.append(float(np.min(np.diff(v[early]) / np.diff(t[early]))))
+    if not speeds:
+        return math.nan, math.nan
+    return float(np.ptp(np.concatenate(speeds))), float(min(decel)) if decel else math.nan
+
+
 def human_figures(walk, motion, start_steps: int = START_STEPS) -> HumanFigures:
     """The figures of ``walk`` with its body ``motion`` (:func:`klaw_ocp.body_motion.
     body_motion`, finer than :data:`RATE_FPS`) over its steady cycles."""
@@ -299,6 +323,8 @@ def human_figures(walk, motion, start_steps: int = START_STEPS) -> HumanFigures:
     jump, name, when = limb_rate_jumps(walk, motion, start_steps)
     out.values["limb_jump"] = [jump]
     out.values["limb_jump_where"] = [(name, when)]
+    surge, decel = hip_surge(walk, start_steps)
+    out.values["hip_surge"], out.values["hip_decel"] = [surge], [decel]
     return out
 
 
