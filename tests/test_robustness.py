@@ -143,3 +143,26 @@ def test_a_schedule_across_the_whole_speed_range_converges(method):
     schedule = [{"step": 0, "speed": 1.0}, {"step": 8, "speed": 9.0}, {"step": 16, "speed": 1.0}]
     walk = simulate_walk(_spec(method, steps=17, schedule=schedule), raise_on_failure=False)
     assert walk.status == "ok", walk.message
+
+
+def test_plain_shooting_takes_the_smooth_root_where_the_latch_leaves_none():
+    """A 1.5 m, 60 kg body at 1.2 km/h: its telescope comes down to l1 and grows 72 µm past it
+    between two nodes. The paper's latch then holds the leg at l1 until the vertical, the final
+    conditions jump across the graze by 0.016 rad, and the evented problem has no root on either
+    side. Plain shooting takes the smooth problem's root, which keeps the lock rule at every node,
+    as multiple shooting does (solvers/plain_shooting.py, EVENT_FREE_ROOT): the two modes then
+    agree to the solver tolerance, and the swings re-simulate that stance without events."""
+    from klaw_ocp.control.stance_spec import lock_rule_nodes
+    from klaw_ocp.solvers.plain_shooting import EVENT_FREE_ROOT
+    walks = {m: simulate_walk(_spec(m, height=1.5, mass=60.0, speed=1.2, steps=3)) for m in METHODS}
+    plain, multiple = walks["plain-shooting"], walks["multiple-shooting"]
+    l1 = plain.spec.body.l1
+    assert plain.status == "ok" and all(EVENT_FREE_ROOT in s.subphase("stance").fallbacks for s in plain.steps)
+    for a, b in zip(plain.steps, multiple.steps):
+        stance = a.subphase("stance")
+        assert stance.events == [] and a.subphase("swing1").events == []
+        assert np.all(stance.states[lock_rule_nodes(stance.states, l1), 0] <= l1 + 1e-7)
+        for name in ("F_theta1_magnitude", "pa_offset"):
+            assert stance.parameters[name] == pytest.approx(b.subphase("stance").parameters[name], rel=1e-6)
+        # the swing re-simulates the stance it hangs from (assumption 4), here without events
+        assert a.subphase("swing3").states[-1][:6] == pytest.approx(stance.states[-1], abs=4e-5)

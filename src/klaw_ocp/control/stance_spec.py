@@ -148,6 +148,7 @@ def stance_spec(lock_rule: str = choices.DEFAULT_LOCK_RULE, at_rest: bool = Fals
         path_names=STANCE_PATH,
         residuals=ca.Function("stance_tracking_residuals", args, [tracking_residuals(x, t, p, c)]),
         events=events,
+        path_holds_events=bool(events),     # the lock rule: l1 - w >= 0 on the rule's nodes
         pairing=pairs,
         plausible=ca.Function("stance_plausible", [x, c], [stance_plausible(x, c)]),
     )

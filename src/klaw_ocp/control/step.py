@@ -23,6 +23,7 @@ from ..kinematics.pelvis import PelvisSchedule
 from ..kinematics.swing_foot import SwingFoot
 from ..kinematics.virtual_leg import StanceFoot
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
+from ..solvers.plain_shooting import EVENT_FREE_ROOT
 from ..solvers.problem import mapped
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
@@ -159,6 +160,13 @@ class StepResult:
         return next(s for s in self.subphases if s.name == name)
 
 
+def solved_without_events(stance: SubphaseSolution) -> bool:
+    """Whether plain shooting took a stance's root with its lock events disarmed (the smooth
+    problem's, keeping the lock rule at the nodes: solvers/plain_shooting.py, EVENT_FREE_ROOT); the
+    swings that re-simulate it then disarm them too, as a closing stance's do."""
+    return EVENT_FREE_ROOT in stance.fallbacks
+
+
 def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> list:
     """How the stance met the lock rule (w <= l1 while theta1 < 0, once the leg has come down to l1).
 
@@ -285,7 +293,7 @@ class StepController:
         curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_t1], other_vels[node_t1])
         c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
         x_to = stance.states[node_at(stance.t, t.t_ds)]
-        swings = self.solve_swings(plan, index, x_to, ds, c, stance.events if not at_rest else None,
+        swings = self.solve_swings(plan, index, x_to, ds, c, None if at_rest or solved_without_events(stance) else stance.events,
                                    stance.t[node_at(stance.t, t.t_ds)], curve)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],

@@ -25,12 +25,15 @@ from .. import choices
 from .events import EventIntegrator
 from .integrator import prepare_kernels, subphase_kernels
 from .problem import SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
+from .recovery import recovery_loop
 
 
 #: Gauss-Seidel sweeps that shrink the residual by less than this factor twice in a row are left
 #: for Broyden's method: two coupled unknowns (swing1's and swing2's fall and mean) contract by
 #: 0.6-0.9 a sweep, and thirty slow sweeps cost more shots than Broyden's whole solve.
 SLOW_SWEEPS = 0.5
+#: the fallback name of a root taken from the event-free start (:meth:`PlainShootingSolver._event_free_start`)
+EVENT_FREE_ROOT = "event-free-root"
 
 
 class PlainShootingSolver:
@@ -210,10 +213,28 @@ class PlainShootingSolver:
         try:   # several unknowns: the secant method in several unknowns from the guess; one: 1-D
             several = sum(not f for f in pb.fixed) > 1
             u, residual, shots = self._broyden(pb, u) if several else self._sweeps(pb, u, None)
+            free = (u.copy(), residual) if pb.spec.path_holds_events and self._converged(residual) else None
+            if free is not None:   # its trajectory's path margins at the nodes, without the events
+                times, states, _, _ = self.simulate(pb, u)
+                path_min, plausible = self._margins(pb, states, u, times)
+                free = free if path_min >= -1e-7 and plausible else None
         finally:
             self._events_armed = True
-        u, residual, n = self._sweeps(pb, u, None)
-        return u, residual, shots + n
+        u_evented, residual_evented, n = self._sweeps(pb, u, None)
+        if self._converged(residual_evented) or free is None:
+            return u_evented, residual_evented, shots + n
+        # No root with the events, where the smooth problem's root keeps the path constraints (the
+        # lock rule) at every node: an event fires only between nodes, a graze of micrometres that
+        # the latch holds until the vertical, and the final conditions jump across it with no root
+        # on either side (slow walks, whose telescope hovers at l1). Multiple shooting keeps the
+        # rule at the nodes and takes that root; so does plain shooting then, with the events
+        # disarmed for this solve (:data:`EVENT_FREE_ROOT`; the swings that re-simulate this stance
+        # disarm them too, control/step.py).
+        self._note(EVENT_FREE_ROOT)
+        return free[0], free[1], shots + n
+
+    def _converged(self, residual) -> bool:
+        return bool(np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance)
 
     def _sweeps(self, pb: SubphaseProblem, u: np.ndarray, offset):
         """Gauss-Seidel sweeps of 1-D solves over the (unknown, condition) pairs, for the final
@@ -323,50 +344,8 @@ class PlainShootingSolver:
             self._fallbacks.append(fallback)
 
     def _recover(self, pb: SubphaseProblem, u: np.ndarray):
-        """The paper's recovery loop: the smallest number k of ``recovery_step`` increments of the
-        fixed unknowns (the swing2 hip actuator) after which, with the free unknowns solved again,
-        the path inequality (toe clearance) holds.
-
-        The paper raises the actuator one increment at a time. Clearance grows with the actuator,
-        so the same smallest k is found by doubling k until the toe clears and then bisecting
-        between the last k that did not clear and the first that did: about 2 log2(k) solves
-        instead of k (k reached 300 in first steps from rest).
-        Returns (u, residual, shots, k); k = 0 when no increment is needed.
-        """
-        step = np.asarray(pb.recovery_step, float)
-        solved = {0: u}
-
-        def attempt(k):
-            nearest = solved[min(solved, key=lambda j: abs(j - k))]
-            trial = nearest + (k - min(solved, key=lambda j: abs(j - k))) * step
-            u_k, residual, n = self._solve_free(pb, trial)
-            times, states, _, _ = self.simulate(pb, u_k)
-            ok = (np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance
-                  and self._margins(pb, states, u_k, times)[0] >= 0)
-            solved[k] = u_k
-            return ok, residual, n + 1
-
-        shots, lo, hi, result = 0, 0, 1, None
-        while hi <= self.max_recovery_steps:
-            ok, residual, n = attempt(hi)
-            shots += n
-            if ok:
-                result = (solved[hi], residual)
-                break
-            if hi == self.max_recovery_steps:
-                break
-            lo, hi = hi, min(2 * hi, self.max_recovery_steps)   # the last try is the cap itself
-        if result is None:   # not cleared within max_recovery_steps: report the last attempt
-            return solved[lo], residual, shots, lo
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            ok, residual, n = attempt(mid)
-            shots += n
-            if ok:
-                hi, result = mid, (solved[mid], residual)
-            else:
-                lo = mid
-        return result[0], result[1], shots, hi
+        """The paper's recovery loop (:func:`.recovery.recovery_loop`)."""
+        return recovery_loop(self, pb, u)
 
     def solve(self, pb: SubphaseProblem) -> SubphaseSolution:
         wall0 = time.perf_counter()
@@ -381,7 +360,11 @@ class PlainShootingSolver:
                 self._note("recovery-loop")
                 u, residual, n, recovery = self._recover(pb, u)
                 shots += n
-        times, states, c, log = self.simulate(pb, u)
+        self._events_armed = EVENT_FREE_ROOT not in self._fallbacks
+        try:
+            times, states, c, log = self.simulate(pb, u)
+        finally:
+            self._events_armed = True
         residual = self._kernels(pb).final(states[-1], c)[0]
         res = float(np.max(np.abs(residual))) if np.all(np.isfinite(residual)) else float("inf")
         # forces with the context the trajectory ends in (a lock event switches it), as before

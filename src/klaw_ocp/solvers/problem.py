@@ -64,6 +64,10 @@ class SubphaseSpec:
     path_names: tuple = ()
     residuals: Optional[ca.Function] = None   # (x, t, u, c) -> r; running cost |r|^2 (optimised formulations)
     events: tuple = ()
+    #: whether the path constraints hold at the nodes what the events enforce between them (the
+    #: stance's lock rule): then plain shooting may take the smooth problem's root where the
+    #: evented one has none (:data:`.plain_shooting.EVENT_FREE_ROOT`)
+    path_holds_events: bool = False
     #: pairs (unknown index, final-condition index) for the paper's one-unknown-at-a-time shooting
     pairing: tuple = ()
     #: (x, c) -> margins, all >= 0 on a physically meaningful state: a trajectory that leaves them
