@@ -30,6 +30,7 @@ import numpy as np
 
 from .body_motion.skeleton import ANGLE_NAMES
 from .dynamics import stance_hips
+from .gait.plan import dimensionless_speed
 
 #: the normative table (its header says where it comes from)
 NORMATIVE_CSV = Path(__file__).resolve().parent / "data" / "normative_sagittal_schwartz2008.csv"
@@ -60,16 +61,6 @@ AFTER_HEEL_STRIKE = 0.045
 
 # ------------------------------------------------------------------------------------------
 # the normative curves
-
-def leg_length(body) -> float:
-    """The leg length L of the dimensionless speed (m): the standing hip height l1 + l9."""
-    return body.l1 + body.l9
-
-
-def dimensionless_speed(body, speed_kmh: float) -> float:
-    """v / sqrt(g L), the speed of Schwartz et al.'s classes."""
-    return speed_kmh / 3.6 / math.sqrt(body.g * leg_length(body))
-
 
 @lru_cache(maxsize=1)
 def normative_table() -> dict:

@@ -276,13 +276,18 @@ def plan_step(body: Body, attrs, i: int, p: LocomotionParameters, t_start: float
 HIP_LEAD_FULL_SPEED = 0.45
 
 
+def dimensionless_speed(body: Body, speed_kmh: float) -> float:
+    """v / sqrt(g L), L = l1 + l9 the standing hip height: the speed of Schwartz et al.'s classes
+    (:mod:`klaw_ocp.human_gait`) and of the hip's lead."""
+    return speed_kmh / 3.6 / math.sqrt(body.g * (body.l1 + body.l9))
+
+
 def heel_strike_hip_lead(body: Body, attrs, speed_kmh: float) -> float:
     """How far the hip is ahead of half-way along the step at heel strike, as a fraction of the
     step (eq. 3 with our deviation, :mod:`klaw_ocp.gait.symmetry`): the attribute
     ``heel_strike_hip_lead``, in proportion to the dimensionless speed below
     :data:`HIP_LEAD_FULL_SPEED`."""
-    v_star = speed_kmh / 3.6 / math.sqrt(body.g * (body.l1 + body.l9))
-    return attrs.heel_strike_hip_lead * min(1.0, v_star / HIP_LEAD_FULL_SPEED)
+    return attrs.heel_strike_hip_lead * min(1.0, dimensionless_speed(body, speed_kmh) / HIP_LEAD_FULL_SPEED)
 
 
 def landing_hip_shift(body: Body, attrs) -> float:

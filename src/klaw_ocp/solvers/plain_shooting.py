@@ -166,24 +166,24 @@ class PlainShootingSolver:
         several = sum(not f for f in pb.fixed) > 1
         if several and pb.spec in self._coupled:     # (ordinary here, so not noted as a fallback)
             u0, residual0, shots0 = self._broyden(pb, start.copy(), self._coupled[pb.spec])
-            if np.all(np.isfinite(residual0)) and np.max(np.abs(residual0)) <= self.tolerance:
+            if self._converged(residual0):
                 return u0, residual0, shots0
         else:
             shots0 = 0
         u1, residual, shots = self._sweeps(pb, u.copy(), None)
         shots += shots0
-        if np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= self.tolerance:
+        if self._converged(residual):
             return u1, residual, shots
         if several:
             self._note("broyden")
             u2, residual2, n = self._broyden(pb, start.copy())
             shots += n
-            if np.all(np.isfinite(residual2)) and np.max(np.abs(residual2)) <= self.tolerance:
+            if self._converged(residual2):
                 return u2, residual2, shots
         if pb.spec.events:
             u3, residual3, n = self._event_free_start(pb, start.copy())
             shots += n
-            if np.all(np.isfinite(residual3)) and np.max(np.abs(residual3)) <= self.tolerance:
+            if self._converged(residual3):
                 return u3, residual3, shots
         offset0 = self._final(pb, start)[0]
         shots += 1

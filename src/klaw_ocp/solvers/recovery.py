@@ -26,8 +26,8 @@ def recovery_loop(solver, pb: SubphaseProblem, u: np.ndarray):
         trial = nearest + (k - min(solved, key=lambda j: abs(j - k))) * step
         u_k, residual, n = solver._solve_free(pb, trial)      # noqa: SLF001 - the solver's own free solve
         times, states, _, _ = solver.simulate(pb, u_k)
-        margin = solver._margins(pb, states, u_k, times)[0]     # noqa: SLF001 - the solver's own margins
-        ok = np.all(np.isfinite(residual)) and np.max(np.abs(residual)) <= solver.tolerance and margin >= 0
+        # (the solver's own convergence and path checks)
+        ok = solver._converged(residual) and solver._margins(pb, states, u_k, times)[0] >= 0  # noqa: SLF001
         solved[k] = u_k
         return ok, residual, n + 1
 
