@@ -224,8 +224,12 @@ def short_walk():
 
 
 def _with(walk, **attributes):
+    """The body of ``walk`` with other attributes (the walk's and every step's: a step's own are
+    the ones its body moves with)."""
     spec = replace(walk.spec, attributes=walk.spec.attributes.with_overrides(attributes))
-    return body_motion(replace(walk, spec=spec), 30.0)
+    steps = [replace(s, plan=replace(s.plan, attributes=s.plan.attributes.with_overrides(attributes)))
+             for s in walk.steps]
+    return body_motion(replace(walk, spec=spec, steps=steps), 30.0)
 
 
 def _column(motion, name):

@@ -91,6 +91,20 @@ def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(
         assert speeds[-1] == pytest.approx(3.0) and all(abs(b - a) <= 1.0 + 1e-9 for a, b in zip(speeds, speeds[1:]))
 
 
+def test_a_determinant_changes_the_walk_from_a_later_step_without_a_new_walk(client):
+    """A page's pelvic list and arm swing sliders change the walk on (#38 item 1: attributes before
+    each step), the step message saying which ones it walks with; the walk is not restarted."""
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        walk_steps(ws, 2)
+        ws.send_text(json.dumps({"type": "set", "values": {"attributes.pelvic_list": 9, "attributes.arm_swing_amplitude": 25}}))
+        target = receive(ws, "accepted")["target"]
+        assert target["attributes"]["pelvic_list"] == 9.0 and "speed" not in target
+        steps = walk_steps(ws, 4)
+        assert [s["index"] for s in steps] == [2, 3, 4, 5]             # the same walk, going on
+        lists = [s["attributes"]["pelvic_list"] for s in steps]
+        assert lists[0] == 5.0 and lists[-1] == 9.0
+
+
 @pytest.mark.parametrize("text, field", [
     ("x" * 5000, "message"), ("not json", "message"), ("[1, 2]", "type"), ('{"type": "fly"}', "type"),
     ('{"type": "set", "values": {"speed": "fast"}}', "walk.speed"),
@@ -98,6 +112,8 @@ def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(
     ('{"type": "start", "settings": {"body.height": 3.0}}', "body.height"),
     ('{"type": "start", "settings": {"output.dir": "/etc"}}', "settings"),
     ('{"type": "start", "settings": {"attributes.pelvic_list": 90}}', "attributes.pelvic_list"),
+    ('{"type": "set", "values": {"attributes.pelvic_list": 90}}', "attributes.pelvic_list"),
+    ('{"type": "set", "values": {"attributes.sf_max": 100}}', "values"),
     ('{"type": "need", "step": -1}', "step"),
 ])
 def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text, field):
@@ -113,7 +129,8 @@ def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text,
 def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, tmp_path, monkeypatch, stopped):
     with client.websocket_connect("/walk", headers=ORIGIN) as ws:
         walk_steps(ws, 2)
-        ws.send_text(json.dumps({"type": "set", "values": {"speed": 4.0, "step_length": 0.7}}))
+        ws.send_text(json.dumps({"type": "set", "values": {"speed": 4.0, "step_length": 0.7,
+                                                            "attributes.pelvic_rotation": 7}}))
         walk_steps(ws, 2)
         if stopped:
             ws.send_text(json.dumps({"type": "stop"}))

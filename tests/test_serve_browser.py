@@ -108,6 +108,15 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         print(f"the page asks for the next step {1000 * lead:.0f} ms before the step on screen ends")
         assert 0.06 <= lead <= 0.25
         assert browser.execute_script("return window.klaw.refusals.length") == 0
+        # a determinant's slider (pelvic list) changes the walk going on from a later step, with
+        # no new walk (the step indices run on)
+        walked = len(browser.execute_script("return window.klaw.shown"))
+        browser.execute_script("""const s = document.getElementById("attr-pelvic_list"); s.value = 10;
+                                  s.dispatchEvent(new Event("input")); s.dispatchEvent(new Event("change"));""")
+        wait_for(browser, f"return window.klaw.shown.length >= {walked + 3}", timeout=30)
+        shown = browser.execute_script("return window.klaw.shown")
+        assert [s["index"] for s in shown] == list(range(len(shown)))
+        assert shown[walked - 1]["pelvic_list"] == 5.0 and shown[-1]["pelvic_list"] == 10.0, shown
         # past the envelope: the CLI's one line under the slider, and the walk goes on
         browser.execute_script("""const s = document.getElementById("speed"); s.value = 11.5;
                                   s.dispatchEvent(new Event("input"));""")

@@ -32,7 +32,11 @@ def drive(live: StepwiseWalk, actions: dict) -> list:
 @pytest.fixture(scope="module", params=METHODS)
 def session(request):
     live = StepwiseWalk(config(request.param, start_from_rest=True))
-    ready = drive(live, {1: lambda: live.request(speed=3.0), 5: lambda: live.request(step_frequency=120),
+    ready = drive(live, {1: lambda: live.request(speed=3.0),
+                         3: lambda: live.request({"pelvic_list": 9.0, "arm_swing_amplitude": 25.0}),
+                         5: lambda: live.request(step_frequency=120),
+                         7: lambda: live.request({"pelvic_rotation": 8.0, "toe_clearance": 0.025,
+                                                  "pelvic_lateral_shift": 0.04}),
                          11: live.stop})
     return live, ready
 
@@ -75,6 +79,41 @@ def test_changes_ramp_within_the_per_step_limits_and_reach_their_target(session)
     assert min(speeds) == pytest.approx(3.0)
     assert params[-1].step_frequency_spm == pytest.approx(120.0)
     assert ready[-1].closing and ready[-1].result.plan.parameters.step_length_m == 0.0
+
+
+def test_attributes_asked_for_reach_the_second_step_after_the_one_on_screen_and_the_exported_schedule(session):
+    live, _ = session
+    steps = live.walk.steps
+    lists = [s.plan.attributes.pelvic_list for s in steps]
+    rotations = [s.plan.attributes.pelvic_rotation for s in steps]
+    base = live.attributes
+    # asked with step 3 on screen (step 4 solved, step 5 planned again): from step 5 on
+    assert lists[:5] == [base.pelvic_list] * 5 and lists[5:] == [9.0] * (len(steps) - 5)
+    assert rotations[:9] == [base.pelvic_rotation] * 9 and rotations[9:] == [8.0] * (len(steps) - 9)
+    # the pelvis solved with them, turning on from the rotation the step before ended with
+    assert steps[5].pelvis.list_peak == pytest.approx(np.radians(9.0))
+    assert steps[9].pelvis.rotation_start == pytest.approx(np.radians(base.pelvic_rotation))
+    assert steps[9].pelvis.rotation_end == pytest.approx(np.radians(8.0))
+    assert steps[10].pelvis.rotation_start == pytest.approx(np.radians(8.0))
+    schedule = live.reproducing_config().walk.schedule
+    assert schedule[-1].attributes == {"pelvic_rotation": 8.0, "pelvic_list": 9.0, "pelvic_lateral_shift": 0.04,
+                                       "arm_swing_amplitude": 25.0, "toe_clearance": 0.025}
+
+
+@pytest.mark.parametrize("values, field", [({"pelvic_list": 50.0}, "attributes.pelvic_list"),
+                                           ({"sf_max": 100.0}, "attributes.sf_max"),
+                                           ({"toe_clearance": "high"}, "attributes.toe_clearance")])
+def test_attributes_out_of_range_or_not_per_step_are_refused_in_one_line(values, field):
+    live = StepwiseWalk(config())
+    live.next_step()
+    with pytest.raises(ConfigError) as err:
+        live.request(values, speed=4.0)     # refused whole: the speed is not taken either
+    message = str(err.value)
+    assert "\n" not in message and message.startswith(field) and "allowed" in message
+    live.stop()
+    drive(live, {})
+    assert all(s.plan.attributes == live.attributes for s in live.walk.steps)
+    assert all(s.plan.parameters.speed_kmh in (5.0, 0.0) for s in live.walk.steps)
 
 
 @pytest.mark.parametrize("method", METHODS)

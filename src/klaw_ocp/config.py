@@ -80,19 +80,22 @@ class BodyConfig(BaseModel):
 
 
 class ScheduleEntry(BaseModel):
-    """From step ``step`` (0-based) on, these locomotion parameters (completed with eq. 1)."""
+    """From step ``step`` (0-based) on, these locomotion parameters (completed with eq. 1) and
+    these values of the attributes that may change per step (``STEP_ATTRIBUTES``); between two
+    entries that give a value, it moves linearly from step to step."""
 
     model_config = _STRICT
     step: int = Field(ge=0, lt=MAX_STEPS)
     speed: Optional[float] = Field(default=None, gt=0)  # km/h
     step_length: Optional[float] = Field(default=None, gt=0)  # m
     step_frequency: Optional[float] = Field(default=None, gt=0)  # steps/min
+    attributes: Optional[dict[str, float]] = None
 
     @model_validator(mode="after")
     def _some_parameter(self):
-        if self.speed is None and self.step_length is None and self.step_frequency is None:
+        if self.speed is None and self.step_length is None and self.step_frequency is None and not self.attributes:
             raise _FieldError(f"{{step: {self.step}}} with no parameter",
-                              "at least one of speed, step_length, step_frequency")
+                              "at least one of speed, step_length, step_frequency, attributes")
         return self
 
 

@@ -32,6 +32,7 @@ from .control.swing_law import SWING_FORCES
 from .control.torques import hip_height_reference
 from .dynamics import stance_hips
 from .errors import finite_real
+from .gait.attributes import STEP_ATTRIBUTES
 from .gait.plan import stance_leg
 from .kinematics.leg_geometry import leg_fk
 
@@ -251,6 +252,9 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
         swing_foot = swing_foot_clearance(spec.body, step, _step_hips(spec.body, step, step_offsets))
     stance = [sub.name for sub in step.subphases].index("stance")
     entry = step.plan.as_dict()
+    # the attributes a step may have of its own (a schedule's), as it walked with them
+    attrs = step.plan.attributes if step.plan.attributes is not None else spec.attributes
+    entry["attributes"] = {name: attrs.get(name) for name in STEP_ATTRIBUTES}
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                  hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                  **peak_swing_hip_torque(step, spec.body.mass),

@@ -34,6 +34,7 @@ from .errors import ConfigError, GaitLimitError, out_of_range
 from .gait import closing_step
 from .gait.envelope import check_step_changes, check_step_length
 from .gait.parameters import complete_parameters
+from .gait.attributes import ATTRIBUTES, STEP_ATTRIBUTES
 from .gait.plan import MAX_STEPS, MAX_WALK_S, PARAMETER_KEYS, plan_step
 from .results import step_table
 from .solvers import make_solver
@@ -111,6 +112,10 @@ class StepwiseWalk:
         #: each planned step's (v, sl) as given to eq. 1 (the completed speed may differ from it
         #: in the last bit, so the schedule carries these, not the completed ones)
         self._requested = [self._base]
+        #: the values of the attributes that may change per step asked for (STEP_ATTRIBUTES), and
+        #: each planned step's
+        self._target_attributes = self._step_values(self.attributes)
+        self._step_attributes = [self._target_attributes]
         self._parameters = [self._complete(*self._base, "walk")]
         self._target = self._base
         self._plans = [plan_step(self.body, self.attributes, 0, self._parameters[0], 0.0, 0.0,
@@ -135,20 +140,49 @@ class StepwiseWalk:
         return complete_parameters(self.body, speed_kmh=v, step_length=sl, attributes=self.attributes,
                                    field_prefix=field)
 
-    def request(self, **values) -> dict:
-        """Ask for new locomotion parameters: a subset of speed (km/h), step_length (m) and
-        step_frequency (steps/min). Returns the completed target {speed, step_length,
-        step_frequency}; raises ConfigError / GaitLimitError (one line) outside the envelope, the
-        walk going on as before."""
+    def request(self, attributes: dict | None = None, **values) -> dict:
+        """Ask for new locomotion parameters (a subset of speed km/h, step_length m and
+        step_frequency steps/min, completed with eq. 1) and new values of the ``attributes`` that
+        may change per step (STEP_ATTRIBUTES: the determinants of gait and the toe clearance; the
+        others are the walker's), from the next step that can change. Returns the completed target
+        {speed, step_length, step_frequency} (with "attributes": every per-step one as it will be,
+        when some were asked for); raises ConfigError / GaitLimitError (one line) outside the
+        envelope or their ranges, the walk going on as before: nothing is taken unless all is."""
         extra = sorted(set(values) - set(PARAMETER_KEYS))
         if extra:
             raise ConfigError(out_of_range(extra[0], values[extra[0]], "one of speed, step_length, step_frequency"))
-        p = complete_parameters(self.body, speed_kmh=values.get("speed"), step_length=values.get("step_length"),
-                                step_frequency=values.get("step_frequency"), attributes=self.attributes,
-                                field_prefix="walk")
-        check_step_length(self.body, p, len(self._plans))
-        self._target = (p.speed_kmh, p.step_length_m)
-        return {"speed": p.speed_kmh, "step_length": p.step_length_m, "step_frequency": p.step_frequency_spm}
+        if attributes is not None and not isinstance(attributes, dict):
+            raise ConfigError(out_of_range("attributes", attributes, "a mapping of attribute name to number"))
+        target = {}
+        if values:
+            p = complete_parameters(self.body, speed_kmh=values.get("speed"), step_length=values.get("step_length"),
+                                    step_frequency=values.get("step_frequency"), attributes=self.attributes,
+                                    field_prefix="walk")
+            check_step_length(self.body, p, len(self._plans))
+            target = {"speed": p.speed_kmh, "step_length": p.step_length_m, "step_frequency": p.step_frequency_spm}
+        step_values = dict(zip(STEP_ATTRIBUTES, self._target_attributes))
+        for name, value in (attributes or {}).items():
+            if name not in STEP_ATTRIBUTES:
+                raise ConfigError(out_of_range(f"attributes.{name}", value, "an attribute that may change per "
+                                               "step: " + ", ".join(STEP_ATTRIBUTES)))
+            step_values[name] = ATTRIBUTES[name].check(value)
+        if values:
+            self._target = (target["speed"], target["step_length"])
+        if attributes:
+            self._target_attributes = tuple(step_values[name] for name in STEP_ATTRIBUTES)
+            target["attributes"] = step_values
+        return target
+
+    @staticmethod
+    def _step_values(attrs) -> tuple:
+        return tuple(attrs.get(name) for name in STEP_ATTRIBUTES)
+
+    def _attributes_of(self, values: tuple):
+        """The walk's attributes with these values of STEP_ATTRIBUTES (the walk's own object where
+        they are its own, as a schedule without attributes plans)."""
+        if values == self._step_values(self.attributes):
+            return self.attributes
+        return self.attributes.with_overrides(dict(zip(STEP_ATTRIBUTES, values)))
 
     def stop(self) -> None:
         """End the walk at rest: the next step planned is the closing step (sl = 0)."""
@@ -180,14 +214,17 @@ class StepwiseWalk:
             return closing_step(self.body, self.attributes, last)
         previous = self._requested[-1]
         wanted = self._ramped(previous)
+        step_values = self._target_attributes
+        attrs = self._attributes_of(step_values)
         try:
             p = self._complete(*wanted, f"walk.schedule[{i}]") if wanted != previous else self._parameters[-1]
-            plan = plan_step(self.body, self.attributes, i, p, t, x, self.spec.start_from_rest)
+            plan = plan_step(self.body, attrs, i, p, t, x, self.spec.start_from_rest)
             check_step_changes(self.body, [last.parameters, plan.parameters], self.attributes)
         except GaitLimitError as err:     # not reachable from a checked target; kept safe all the same
             self.refusals.append(str(err))
             self._target, wanted, p = previous, previous, self._parameters[-1]
-            plan = plan_step(self.body, self.attributes, i, p, t, x, self.spec.start_from_rest)
+            plan = plan_step(self.body, attrs, i, p, t, x, self.spec.start_from_rest)
+        self._step_attributes.append(step_values)
         self._requested.append(wanted)
         self._parameters.append(p)
         self._plans.append(plan)
@@ -202,9 +239,10 @@ class StepwiseWalk:
         if k == 0 or self._loop.current is None or k != len(self._plans) - 1 or self._closing_at is not None:
             return
         plan, requested, parameters = self._plans.pop(), self._requested.pop(), self._parameters.pop()
+        step_values = self._step_attributes.pop()
         refusals = len(self.refusals)
         revised = self._plan_next(k)
-        if self._closing_at is None and self._requested[-1] == requested:
+        if self._closing_at is None and self._requested[-1] == requested and self._step_attributes[-1] == step_values:
             # nothing asked since: the plan made before stands
             self._plans[-1], self._requested[-1], self._parameters[-1] = plan, requested, parameters
             del self.refusals[refusals:]
@@ -277,11 +315,17 @@ class StepwiseWalk:
         n = self._steps_so_far(steps)
         at_rest = self._closing_at is not None and n > self._closing_at
         regular = self._closing_at if at_rest else n
-        requested = self._requested[:regular]
+        # each step's (v, sl) and its values of the attributes that may change per step
+        requested = list(zip(self._requested[:regular], self._step_attributes[:regular]))
+        base = (self._base, self._step_values(self.attributes))
         changes = [i for i in range(1, len(requested)) if requested[i] != requested[i - 1]]
-        first = next((i for i, r in enumerate(requested) if r != self._base), None)
+        first = next((i for i, r in enumerate(requested) if r != base), None)
         span = range(first, changes[-1] + 1) if first is not None else range(0)
-        schedule = [{"step": i, "speed": requested[i][0], "step_length": requested[i][1]} for i in span]
+        # the attributes that differ from the walk's at some step, in every entry
+        moved = [j for j, name in enumerate(STEP_ATTRIBUTES) if any(r[1][j] != base[1][j] for r in requested)]
+        schedule = [{"step": i, "speed": requested[i][0][0], "step_length": requested[i][0][1],
+                     **({"attributes": {STEP_ATTRIBUTES[j]: requested[i][1][j] for j in moved}} if moved else {})}
+                    for i in span]
         data = self.config.model_dump(mode="json")
         data["walk"] = {"speed": self._base[0], "step_length": self._base[1], "steps": regular,
                         "schedule": schedule, "start_from_rest": self.spec.start_from_rest,

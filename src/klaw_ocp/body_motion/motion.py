@@ -29,7 +29,7 @@ from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_bo
 from .skeleton import ANGLE_NAMES, SIDES
 from .stance_legs import stance_frames
 from .swing_legs import swing_legs
-from .upper_body import StepWindow, lateral_displacement, upper_body_motion
+from .upper_body import StepWindow, lateral_displacement, step_amplitudes, upper_body_motion
 from .walk_samples import frame_times, locate_steps, stance_at, stance_curves
 
 #: The columns of angles.csv: time (s), the root (pelvis centre, m), then the 56 angles (degrees).
@@ -108,7 +108,22 @@ class LegPlanes:
 def step_windows(walk) -> list:
     """Each step as the upper body and the lateral displacement see it (:class:`.upper_body.StepWindow`)."""
     return [StepWindow(s.t_start, s.plan.timings.t_step, s.plan.timings.t_ds, stance_leg(s.index),
-                       moving=s.plan.constraints.step_length != 0) for s in walk.steps]
+                       moving=s.plan.constraints.step_length != 0,
+                       lateral_shift=None if s.plan.attributes is None else s.plan.attributes.pelvic_lateral_shift)
+            for s in walk.steps]
+
+
+def arm_swing_at(walk, samples: Samples) -> np.ndarray | None:
+    """The arm swing amplitude (rad) at the frames, where the walk's steps have amplitudes of their
+    own (a schedule's), each reached at its step's heel strike (:func:`.upper_body.step_amplitudes`);
+    None where every step has the walk's."""
+    own = [s.plan.attributes.rad("arm_swing_amplitude") for s in walk.steps if s.plan.attributes is not None]
+    walk_value = walk.spec.attributes.rad("arm_swing_amplitude")
+    if all(v == walk_value for v in own):
+        return None
+    values = [walk_value if s.plan.attributes is None else s.plan.attributes.rad("arm_swing_amplitude")
+              for s in walk.steps]
+    return step_amplitudes(values, samples.step, samples.tau, [s.plan.timings.t_step for s in walk.steps])
 
 
 @dataclass(frozen=True)
@@ -312,7 +327,7 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     t, root, pelvis = samples.t, centre, pelvis_angles
     angles = skeleton_angles(body, root, pelvis, legs, UpperBody.neutral())
     hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
-    upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis)
+    upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis, arm_swing_at(walk, samples))
     for name, values in upper_body_angles(upper, len(t)).items():
         angles[:, ANGLE_NAMES.index(name)] = values
     return BodyMotion(t, root, pelvis, legs, upper, angles)

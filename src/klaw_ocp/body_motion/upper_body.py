@@ -59,6 +59,8 @@ class StepWindow:
     t_ds: float         # s; the other (hind) leg's toe-off is at t_start + t_ds
     stance_side: str    # "right" or "left": the leg that lands at t_start
     moving: bool = True  # False for a step with step length 0 (a walk's closing step ending at rest)
+    #: the step's pelvic_lateral_shift (m), where its attributes differ from the walk's; None: the walk's
+    lateral_shift: float | None = None
 
 
 def _vector(value, name: str, n: int | None = None) -> np.ndarray:
@@ -108,9 +110,11 @@ def lateral_displacement(attrs, steps: Sequence[StepWindow], t: np.ndarray) -> n
     the curve is continuous wherever the windows start and end.
     """
     time = _vector(t, "t")
-    shift = attrs.get("pelvic_lateral_shift")
     z = np.zeros_like(time)
     for step in _checked_steps(steps):
+        # a step's own shift (its schedule's): the hat is 0 at both heel strikes, so the pelvis
+        # moves on continuously where the shift changes from one step to the next
+        shift = attrs.get("pelvic_lateral_shift") if step.lateral_shift is None else step.lateral_shift
         if not step.moving or shift == 0.0:
             continue
         toe_off = step.t_start + step.t_ds
@@ -122,16 +126,17 @@ def lateral_displacement(attrs, steps: Sequence[StepWindow], t: np.ndarray) -> n
     return z
 
 
-def _arms(attrs, hips: dict) -> tuple[dict, dict, dict]:
+def _arms(attrs, hips: dict, amplitude: np.ndarray | None = None) -> tuple[dict, dict, dict]:
     """Shoulder flexion, shoulder abduction and elbow flexion of each side (rad).
 
     Each shoulder swings with the difference of the hips, opposite hip minus own: forward as the
     opposite leg swings forward (principle 3), in antiphase with its own leg, about the same mean
     whatever the hips' mean flexion, and still when the legs stand side by side. Its half range is
     ``arm_swing_amplitude`` times the hips' half range over REFERENCE_HIP_HALF_RANGE, so shorter,
-    slower steps swing the arms less, as in people.
+    slower steps swing the arms less, as in people. ``amplitude`` (rad, one per frame): where the
+    walk's steps have their own ``arm_swing_amplitude`` (:func:`step_amplitudes`).
     """
-    gain = attrs.rad("arm_swing_amplitude") / REFERENCE_HIP_HALF_RANGE
+    gain = (attrs.rad("arm_swing_amplitude") if amplitude is None else amplitude) / REFERENCE_HIP_HALF_RANGE
     shoulder, abduction, elbow = {}, {}, {}
     for side in _SIDES:
         swing = gain * 0.5 * (hips[_OTHER[side]] - hips[side])
@@ -143,11 +148,23 @@ def _arms(attrs, hips: dict) -> tuple[dict, dict, dict]:
     return shoulder, abduction, elbow
 
 
+def step_amplitudes(values: np.ndarray, step: np.ndarray, tau: np.ndarray, t_step: np.ndarray) -> np.ndarray:
+    """A per-step value at frames (``step`` index into ``values`` (m,), ``tau`` s into that step
+    of length ``t_step`` (m,)): step k's at its heel strike, moving to step k + 1's by the next on
+    S(s) = 3s² − 2s³, whose rate is 0 at both ends, so a change from one step to the next never
+    jumps an angle or its rate (a walk's last step keeps its own)."""
+    values, step = np.asarray(values, float), np.asarray(step, int)
+    following = values[np.minimum(step + 1, len(values) - 1)]
+    s = np.clip(np.asarray(tau, float) / np.asarray(t_step, float)[step], 0.0, 1.0)
+    return values[step] + (following - values[step]) * s * s * (3.0 - 2.0 * s)
+
+
 def upper_body_motion(attrs, t: np.ndarray, trunk_lean: np.ndarray, hip_flexion: dict,
-                      pelvis_angles: np.ndarray | None = None) -> UpperBody:
+                      pelvis_angles: np.ndarray | None = None, arm_swing: np.ndarray | None = None) -> UpperBody:
     """trunk_lean: the dynamics' θ2 (n,) rad (> 0 leaning forward); hip_flexion: {"right": (n,), "left": (n,)}
     clinical hip flexion of each leg (rad, + thigh forward) at the same frames; pelvis_angles: (n, 3)
-    tilt, list, rotation (rad, docs/skeleton.md signs), None = level and square. Returns pose.UpperBody.
+    tilt, list, rotation (rad, docs/skeleton.md signs), None = level and square; arm_swing: (n,)
+    the arm swing amplitude (rad) at each frame, None = the attribute's. Returns pose.UpperBody.
 
     The trunk totals are relative to the pelvis and the head's to the top of the spine; they add
     to the pelvis angles plane by plane (exact when only one plane moves, first order otherwise,
@@ -173,7 +190,8 @@ def upper_body_motion(attrs, t: np.ndarray, trunk_lean: np.ndarray, hip_flexion:
     trunk_rotation = -(1.0 + THORAX_COUNTER_ROTATION) / SHOULDER_ROTATION_SHARE * rotation_angle
     head_flexion = -(tilt + trunk_flexion)
     head_rotation = -(rotation_angle + trunk_rotation)
-    shoulder_flexion, shoulder_abduction, elbow_flexion = _arms(attrs, hips)
+    amplitude = None if arm_swing is None else _vector(arm_swing, "arm_swing", n)
+    shoulder_flexion, shoulder_abduction, elbow_flexion = _arms(attrs, hips, amplitude)
     return UpperBody(trunk_flexion=trunk_flexion, trunk_bending=trunk_bending,
                      trunk_rotation=trunk_rotation, head_flexion=head_flexion,
                      head_rotation=head_rotation, shoulder_flexion=shoulder_flexion,

@@ -116,6 +116,9 @@ class StepInput:
     #: the next step's double support (s), which ends with this stance leg's toe-off; None: the
     #: walk's last step (its own double support stands in)
     next_t_ds: float | None = None
+    #: the pelvis's rotation at this heel strike (rad): the one the step before ended with (its
+    #: plan's ``hip_shift``); None: this step's own attribute (0 where it starts standing)
+    pelvis_rotation: float | None = None
 
 
 @dataclass(frozen=True)
@@ -209,6 +212,11 @@ class StepController:
                        "swing2": np.array([knee, SWING2_RECOVERY_SCALE, knee]),
                        "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
+    def step_attributes(self, plan):
+        """The attributes of the step ``plan`` plans (its schedule's values of the attributes that
+        may change per step), the walk's where the plan carries none."""
+        return self.attrs if plan.attributes is None else plan.attributes
+
     # -- contexts ------------------------------------------------------------------------------
     def stance_context(self, plan, inp: StepInput) -> dict:
         b, g, t = self.body, self.gains, plan.timings
@@ -278,20 +286,20 @@ class StepController:
         pelvis (its other hip, from which the hind leg and the swing hang), the hind leg's double
         support to toe-off, curve P and the swing foot, the swing context, the
         three swings (solved), the heel's clearance before it strikes."""
-        b, t = self.body, plan.timings
+        b, t, a = self.body, plan.timings, self.step_attributes(plan)
         stance = self.solve_stance(plan, inp, index, at_rest)
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
-        stance_foot = stance_leg_rules(b, self.attrs, plan, stance, hips, inp.origin_x, inp.stance_standing,
+        stance_foot = stance_leg_rules(b, a, plan, stance, hips, inp.origin_x, inp.stance_standing,
                                        inp.next_t_ds)
-        pelvis = step_pelvis(b, self.attrs, plan, inp.stance_standing)
+        pelvis = step_pelvis(b, a, plan, inp.stance_standing, inp.pelvis_rotation)
         other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
-        ds = hind_leg_double_support(self.attrs, plan, stance, other_hips, other_vels, inp.hind_foot)
+        ds = hind_leg_double_support(a, plan, stance, other_hips, other_vels, inp.hind_foot)
         t1 = t.t_ds + t.t_swing1_end
         node_t1 = node_at(stance.t, t1)
-        curve = plan_curve_p(b, self.attrs, plan, ds, other_hips[node_t1], other_vels[node_t1])
-        c = swing_context(b, self.attrs, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
+        curve = plan_curve_p(b, a, plan, ds, other_hips[node_t1], other_vels[node_t1])
+        c = swing_context(b, a, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
         x_to = stance.states[node_at(stance.t, t.t_ds)]
         swings = self.solve_swings(plan, index, x_to, ds, c, None if at_rest or solved_without_events(stance) else stance.events,
                                    stance.t[node_at(stance.t, t.t_ds)], curve)
@@ -314,7 +322,7 @@ class StepController:
         stance's lock events, None in the closing step (whose stance has none)."""
         t = plan.timings
         t1, t2 = t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
-        specs, a = self.swing_specs, self.attrs
+        specs, a = self.swing_specs, self.step_attributes(plan)
         # The swing re-simulates the stance (swing_law.py), so with plain shooting's lock events it
         # must start in the stance's lock state at toe-off: locked after an early 'leg_too_long'
         # not yet undone by 'leg_vertical'; in the closing step, whose stance has no lock events,

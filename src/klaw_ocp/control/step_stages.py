@@ -125,12 +125,15 @@ def node_at(t_nodes: np.ndarray, time: float) -> int:
     return int(np.argmin(np.abs(t_nodes - time)))
 
 
-def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool) -> PelvisSchedule:
+def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool, rotation_start: float | None = None) -> PelvisSchedule:
     """The pelvis of a step (§4.2): its list at mid-step is the attribute's; its rotation at this
-    step's heel strike the attribute's (none where the walk starts from rest, the feet side by
-    side), at the next heel strike the one eq. 3 split the step by (the plan's ``hip_shift``:
-    none at a closing step's end)."""
-    return PelvisSchedule(width=body.l0, rotation_start=0.0 if starts_at_rest else attrs.rad("pelvic_rotation"),
+    step's heel strike ``rotation_start``, the one the step before ended with (default: the
+    attribute's; none where the walk starts from rest, the feet side by side), at the next heel
+    strike the one eq. 3 split the step by (the plan's ``hip_shift``: none at a closing step's
+    end). Where the attribute changes from one step to the next, the pelvis turns continuously."""
+    if rotation_start is None:
+        rotation_start = 0.0 if starts_at_rest else attrs.rad("pelvic_rotation")
+    return PelvisSchedule(width=body.l0, rotation_start=rotation_start,
                           rotation_end=math.asin(plan.constraints.hip_shift / body.l0),
                           list_peak=attrs.rad("pelvic_list"), t_step=plan.timings.t_step)
 

@@ -43,9 +43,10 @@ class AttributeSpec:
     paper: str
     group: str = ""
 
-    def check(self, value) -> float:
-        """Return ``value`` as a float, or raise ConfigError naming ``attributes.<name>``."""
-        field = f"attributes.{self.name}"
+    def check(self, value, field: str | None = None) -> float:
+        """Return ``value`` as a float, or raise ConfigError naming ``field`` (default
+        ``attributes.<name>``)."""
+        field = field or f"attributes.{self.name}"
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ConfigError(out_of_range(field, value, f"a number in {self.unit}"))
         number = finite_real(value)
@@ -211,6 +212,16 @@ _SPECS = [
 #: The registry: attribute name -> :class:`AttributeSpec`, in documentation order.
 ATTRIBUTES: Mapping[str, AttributeSpec] = MappingProxyType({s.name: s for s in _SPECS})
 
+#: The attributes a walk may change from one step to the next (a schedule entry's ``attributes``,
+#: the playground's sliders): the determinants of gait that shape a step's kinematics (§4.2; the
+#: pelvis turns and lists per step, with zero rate at heel strike, and the rotation each step ends
+#: with is the one the next starts from) and the toe clearance swing2 keeps. The others are the
+#: walker's over a whole walk, as in the paper: the envelope's limits, the foot-period and timing
+#: fractions and the controllers' springs, which eq. 1-3 and the step-to-step checks read across
+#: steps.
+STEP_ATTRIBUTES: tuple = ("pelvic_rotation", "pelvic_list", "pelvic_lateral_shift", "arm_swing_amplitude",
+                          "toe_clearance")
+
 #: Registered and validated, but nothing in the package reads them yet, so they do not change a
 #: walk (the pelvis issue will make them act). Remove a name when it acts.
 NOT_USED_YET: frozenset = frozenset()
@@ -348,9 +359,12 @@ def markdown_table() -> str:
         "The values that individualise a walk (paper section 3 and section 5). Override any of them",
         "in a config's `attributes:` mapping. Units: `deg` angles (radians internally), `l1` a",
         "multiple of the leg length l1 = l3 + l4, `1` a plain fraction. Ranges are inclusive.",
-        "Column *walk*: **not used yet** marks an attribute that is validated but that nothing in",
-        "`src/klaw_ocp` reads yet, so setting it does not change the walk (the pelvis issue will make",
-        "it act).",
+        "Column *walk*: **per step** marks an attribute that may change from one step to the next",
+        "(a schedule entry's `attributes`, e.g. `walk.schedule: [{step: 4, attributes: {pelvic_list: 8}}]`,",
+        "moving linearly between two entries as the locomotion parameters do; the playground's",
+        "determinant sliders); the others are the walker's over a whole walk. **not used yet** marks",
+        "an attribute that is validated but that nothing in `src/klaw_ocp` reads yet, so setting it",
+        "does not change the walk.",
     ]
     group = None
     for spec in ATTRIBUTES.values():
@@ -358,7 +372,8 @@ def markdown_table() -> str:
             group = spec.group
             lines += ["", f"## {group}", "", "| name | unit | default | range | source | walk |",
                       "|---|---|---|---|---|---|"]
-        walk = "**not used yet**" if spec.name in NOT_USED_YET else ""
+        walk = ("**not used yet**" if spec.name in NOT_USED_YET
+                else "**per step**" if spec.name in STEP_ATTRIBUTES else "")
         lines.append(f"| `{spec.name}` | {spec.unit} | {spec.default:g} | {spec.low:g} to "
                      f"{spec.high:g} | {spec.paper} | {walk} |")
     return "\n".join(lines) + "\n"

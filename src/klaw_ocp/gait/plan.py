@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 from ..body import Body
 from ..errors import ConfigError, finite_real, out_of_range
-from .attributes import LocomotionAttributes, resolve
+from .attributes import ATTRIBUTES, STEP_ATTRIBUTES, LocomotionAttributes, resolve
 from .envelope import check_body, check_step_changes, check_step_length
 from .parameters import KMH_TO_M_PER_MIN, LocomotionParameters, complete_parameters, natural_step_length
 from .symmetry import StepConstraints, step_constraints
@@ -64,6 +64,9 @@ class StepPlan:
     timings: StateTimings
     constraints: StepConstraints
     t_start: float = 0.0
+    #: the step's locomotion attributes: the walk's, with a schedule's values of the
+    #: :data:`~klaw_ocp.gait.attributes.STEP_ATTRIBUTES` at this step (None: the walk's)
+    attributes: LocomotionAttributes | None = None
 
     def as_dict(self) -> dict:
         """A flat, JSON-ready dict; keys carry their unit (``_s``, ``_m``, ``_rad``, ...)."""
@@ -100,11 +103,28 @@ def _complete(body, values: dict, attrs, prefix: str) -> LocomotionParameters:
                                field_prefix=prefix)
 
 
-def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionParameters]], dict]:
-    """Completed entries in step order, and each step's position in the user's list; entries
-    must come in increasing step order."""
+def _step_attributes(entry: Mapping, field: str) -> dict:
+    """A schedule entry's ``attributes``: names among STEP_ATTRIBUTES, values in their ranges."""
+    values = entry.get("attributes")
+    if values is None:
+        return {}
+    if not isinstance(values, Mapping):
+        raise ConfigError(out_of_range(f"{field}.attributes", values, "a mapping of attribute name to number"))
+    checked = {}
+    for name, value in values.items():
+        if name not in STEP_ATTRIBUTES:
+            raise ConfigError(out_of_range(f"{field}.attributes.{name}", value,
+                                           "an attribute that may change per step: " + ", ".join(STEP_ATTRIBUTES)))
+        checked[name] = ATTRIBUTES[name].check(value, f"{field}.attributes.{name}")
+    return checked
+
+
+def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionParameters]], dict, dict]:
+    """Completed entries in step order, each step's position in the user's list, and the
+    attributes' keys: {name: [(step, value), ...]} in step order. Entries must come in increasing
+    step order; one may set attributes only."""
     if schedule is None:
-        return [], {}
+        return [], {}, {}
     if isinstance(schedule, (str, bytes, Mapping)) or not isinstance(schedule, Sequence):
         raise ConfigError(out_of_range("walk.schedule", schedule, "a list of {step, speed?, "
                                        "step_length?, step_frequency?} entries"))
@@ -113,32 +133,37 @@ def _parse_schedule(body, schedule, attrs) -> tuple[list[tuple[int, LocomotionPa
                           f"(one per step)")
     entries: dict[int, LocomotionParameters] = {}
     positions: dict[int, int] = {}
+    keyed: dict[str, list] = {}
     for j, entry in enumerate(schedule):
         field = f"walk.schedule[{j}]"
         if not isinstance(entry, Mapping):
             raise ConfigError(out_of_range(field, entry, "a mapping {step, speed?, step_length?, "
                                            "step_frequency?}"))
-        extra = sorted(set(entry) - {"step", *PARAMETER_KEYS})
+        extra = sorted(set(entry) - {"step", *PARAMETER_KEYS, "attributes"})
         if extra:
             raise ConfigError(out_of_range(f"{field}.{extra[0]}", entry[extra[0]],
-                                           "only the keys step, speed, step_length, step_frequency"))
+                                           "only the keys step, speed, step_length, step_frequency, attributes"))
         k = entry.get("step")
         if isinstance(k, bool) or not isinstance(k, numbers.Integral) or k < 0:
             raise ConfigError(out_of_range(f"{field}.step", k, "an integer >= 0"))
         k = int(k)
-        if k in entries:
+        if k in positions:
             raise ConfigError(out_of_range(f"{field}.step", k, "a step not already in the schedule"))
-        if entries and k < max(entries):
-            last = max(entries)
+        if positions and k < max(positions):
+            last = max(positions)
             raise ConfigError(out_of_range(f"{field}.step", k, f"a step after {last} (walk.schedule"
                                            f"[{positions[last]}].step): entries in increasing step order"))
         values = _request_values(entry, field)
-        if all(values[key] is None for key in PARAMETER_KEYS):
+        step_attrs = _step_attributes(entry, field)
+        if all(values[key] is None for key in PARAMETER_KEYS) and not step_attrs:
             raise ConfigError(out_of_range(field, dict(entry), "at least one of speed, step_length, "
-                                           "step_frequency"))
-        entries[k] = _complete(body, values, attrs, field)
+                                           "step_frequency, attributes"))
+        if any(values[key] is not None for key in PARAMETER_KEYS):
+            entries[k] = _complete(body, values, attrs, field)
+        for name, value in step_attrs.items():
+            keyed.setdefault(name, []).append((k, value))
         positions[k] = j
-    return sorted(entries.items()), positions
+    return sorted(entries.items()), positions, keyed
 
 
 def _parameters_at(i: int, base: LocomotionParameters | None,
@@ -157,6 +182,24 @@ def _parameters_at(i: int, base: LocomotionParameters | None,
             return complete_parameters(body, speed_kmh=v, step_length=sl, attributes=attrs,
                                        field_prefix=f"walk.step[{i}]")
     return entries[-1][1]
+
+
+def _attributes_at(i: int, attrs: LocomotionAttributes, keyed: dict) -> LocomotionAttributes:
+    """Step ``i``'s attributes: each scheduled one as a schedule's parameters are (the walk's
+    before its first entry, linear between two entries, its last entry's after), the others the
+    walk's; the walk's own object where nothing is scheduled."""
+    if not keyed:
+        return attrs
+    values = {}
+    for name, keys in keyed.items():
+        if i < keys[0][0]:
+            continue
+        values[name] = keys[-1][1]
+        for (ka, va), (kb, vb) in zip(keys, keys[1:]):
+            if ka <= i < kb:
+                values[name] = va + (i - ka) / (kb - ka) * (vb - va)
+                break
+    return attrs.with_overrides(values) if values else attrs
 
 
 def _start_ramp(i: int, p: LocomotionParameters, body: Body, attrs) -> LocomotionParameters:
@@ -213,7 +256,7 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
 
     base_values = _request_values(base_request, "walk")
     check_body(body)
-    entries, positions = _parse_schedule(body, schedule, attrs)
+    entries, positions, keyed = _parse_schedule(body, schedule, attrs)
     if any(v is not None for v in base_values.values()):
         base = _complete(body, base_values, attrs, "walk")
     elif entries and entries[0][0] == 0:
@@ -233,7 +276,8 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
         if i >= MAX_STEPS:
             raise ConfigError(f"walk.duration: got {duration:g} s, which takes more than {MAX_STEPS} "
                               f"steps, allowed at most {MAX_STEPS} steps (docs/limits.md)")
-        plan = plan_step(body, attrs, i, _parameters_at(i, base, entries, body, attrs), t, x, start_from_rest)
+        plan = plan_step(body, _attributes_at(i, attrs, keyed), i, _parameters_at(i, base, entries, body, attrs),
+                         t, x, start_from_rest)
         plans.append(plan)
         t += plan.timings.t_step
         x = plan.constraints.next_ankle_x
@@ -243,7 +287,7 @@ def plan_steps(body: Body, base_request=None, schedule=None, n_steps: int | None
                               f"walking (docs/limits.md)")
 
     # An entry the walk never reaches would be silently ignored; say so instead.
-    last_step = entries[-1][0] if entries else -1
+    last_step = max(positions) if positions else -1
     if last_step >= len(plans):
         raise ConfigError(out_of_range(f"walk.schedule[{positions[last_step]}].step", last_step,
                                        f"0 to {len(plans) - 1} (the walk has {len(plans)} steps)"))
@@ -264,7 +308,8 @@ def plan_step(body: Body, attrs, i: int, p: LocomotionParameters, t_start: float
     constraints = step_constraints(body, p.step_length_m, attrs, ankle_x=ankle_x,
                                    hip_shift=landing_hip_shift(body, attrs),
                                    hip_lead=heel_strike_hip_lead(body, attrs, p.speed_kmh))
-    return StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t_start)
+    return StepPlan(index=i, parameters=p, timings=timings, constraints=constraints, t_start=t_start,
+                    attributes=resolve(attrs))
 
 
 #: the dimensionless speed v / sqrt(g (l1 + l9)) from which the hip leads by the whole attribute
@@ -299,7 +344,9 @@ def landing_hip_shift(body: Body, attrs) -> float:
 def closing_step(body: Body, attributes, last: StepPlan) -> StepPlan:
     """The step that ends a walk at rest (section 5, fig. 8): the swing foot lands beside the
     stance foot (eq. 3 with sl = 0, so theta1 = 0 and w = l1 at the end) at the last step's
-    frequency and timings; it starts where ``last`` ends."""
+    frequency, timings and attributes (the walk's ``attributes`` where ``last`` has none); it
+    starts where ``last`` ends."""
+    attributes = resolve(last.attributes if last.attributes is not None else attributes)
     params = LocomotionParameters(0.0, 0.0, last.parameters.step_frequency_spm)
     con = step_constraints(body, 0.0, attributes, ankle_x=last.constraints.next_ankle_x, closing=True)
-    return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step)
+    return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step, attributes)

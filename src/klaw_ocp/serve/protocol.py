@@ -7,9 +7,11 @@ From the page:
   :data:`SETTINGS` (the config's own paths, as ``klaw-ocp run --set`` takes them) or
   ``attributes.NAME``; a bad value is refused with the config's one line and the walk on screen
   goes on;
-- ``{"type": "set", "values": {"speed": 4.2, "step_length": 0.7}}``: new locomotion parameters
-  from the next step that can change (a subset of speed km/h, step_length m, step_frequency
-  steps/min, completed with eq. 1);
+- ``{"type": "set", "values": {"speed": 4.2, "step_length": 0.7, "attributes.pelvic_list": 8}}``:
+  new locomotion parameters (a subset of speed km/h, step_length m, step_frequency steps/min,
+  completed with eq. 1) and values of the attributes that may change per step
+  (``attributes.NAME``, NAME in :data:`~klaw_ocp.gait.attributes.STEP_ATTRIBUTES`), from the next
+  step that can change;
 - ``{"type": "stop"}``: end the walk at rest; ``{"type": "need", "step": k}``: the page will show
   step k soon (it asks while the step before is on screen; the server solves nothing further);
   ``{"type": "export"}``: the ended walk as walk.bvh and as the config that ``klaw-ocp run``
@@ -24,12 +26,16 @@ import numpy as np
 
 from ..body_motion.skeleton import END_SITES, JOINTS, forward_kinematics
 from ..errors import ConfigError, short_repr
+from ..gait.attributes import STEP_ATTRIBUTES
 from ..gait.plan import PARAMETER_KEYS, stance_leg
 
 #: The settings a walk may be started with, besides ``attributes.NAME`` for any attribute.
 SETTINGS = ("body.height", "body.mass", "solver.method", "walk.start_from_rest",
             "walk.speed", "walk.step_length", "walk.step_frequency")
 TYPES = ("start", "set", "stop", "need", "export")
+#: What a "set" may change from the next step on: the locomotion parameters and the attributes
+#: that may change per step.
+SET_KEYS = (*PARAMETER_KEYS, *(f"attributes.{name}" for name in STEP_ATTRIBUTES))
 #: The dynamics columns a step carries to the page's strips.
 STRIP_COLUMNS = ("t", "hip_y", "hip_y_ref", "F_w", "F_theta1", "F_theta2", "F_theta3", "F_theta4")
 
@@ -65,10 +71,10 @@ def parse(text, max_bytes: int) -> dict:
         return {"type": kind, "settings": _settings(message.get("settings", {}))}
     if kind == "set":
         values = message.get("values")
-        if not isinstance(values, dict) or not values or set(values) - set(PARAMETER_KEYS):
-            raise refusal("values", values, f"a mapping of some of {', '.join(PARAMETER_KEYS)} to numbers")
+        if not isinstance(values, dict) or not values or set(values) - set(SET_KEYS):
+            raise refusal("values", values, f"a mapping of some of {', '.join(SET_KEYS)} to numbers")
         for key, value in values.items():
-            _number(f"walk.{key}", value)
+            _number(key if key.startswith("attributes.") else f"walk.{key}", value)
         return {"type": kind, "values": values}
     if kind == "need":
         step = message.get("step")
@@ -145,6 +151,8 @@ def step_message(ready, body, attrs, planned) -> dict:
         "t_start": plan.t_start, "t_step": plan.timings.t_step, "t_ds": plan.timings.t_ds,
         "speed": plan.parameters.speed_kmh, "step_length": plan.parameters.step_length_m,
         "step_frequency": plan.parameters.step_frequency_spm,
+        # the attributes that may change per step, as this step walks with them
+        "attributes": {name: (plan.attributes or attrs).get(name) for name in STEP_ATTRIBUTES},
         "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
         "frames": {"t": _finite(frames.t, 6), "points": np.rint(points * 1000).astype(np.int64).reshape(len(frames.t), -1).tolist()},
         "dynamics": {**{c: _finite(table[c], 4) for c in STRIP_COLUMNS},

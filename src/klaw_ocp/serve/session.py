@@ -83,7 +83,11 @@ class LiveSession:
         elif kind == "set":
             if self.live is None or self.live.ended:
                 raise Refused("walk", "walk: got a change with no walk going on, allowed once a walk is started")
-            target = self.live.request(**message["values"])
+            values = message["values"]
+            parameters = {k: v for k, v in values.items() if not k.startswith("attributes.")}
+            attributes = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("attributes.")}
+            # all checked before any is taken: a refused value changes nothing
+            target = self.live.request(attributes or None, **parameters)
             await self.send({"type": "accepted", "target": target})
         elif kind == "stop":
             if self.live is not None:

@@ -95,7 +95,7 @@ async function setUpPanel() {
     const div = document.createElement("div");
     div.className = "control"; div.dataset.field = `attributes.${name}`;
     div.innerHTML = `<label>${ATTRIBUTE_LABELS[name]} <output></output> ${spec.unit}
-      <input type="range" id="attr-${name}" step="${spec.unit === "m" ? 0.001 : 0.5}" data-setting="attributes.${name}"></label>
+      <input type="range" id="attr-${name}" step="${spec.unit === "m" ? 0.001 : 0.5}" data-setting="attributes.${name}" data-per-step></label>
       <p class="refusal"></p>`;
     $("attributes").appendChild(div);
     setUpSlider(div.querySelector("input"), spec);
@@ -107,9 +107,15 @@ async function setUpPanel() {
     radio.addEventListener("change", () => { updateSecond(); sendLocomotion(); });
   }
   updateSecond();
-  // the walker's settings make a new walk (the paper's attributes are the walker's, fixed over a walk)
+  // the determinants change the walk from the next step that can change, as the locomotion
+  // parameters do; the walker's other settings (body, solver, start) make a new walk, which
+  // starts with the determinants as they are then
   for (const input of document.querySelectorAll("[data-setting]")) {
-    input.addEventListener("change", () => send({ type: "start", settings: settings() }));
+    if (input.hasAttribute("data-per-step")) {
+      input.addEventListener("change", () => send({ type: "set", values: { [input.dataset.setting]: Number(input.value) } }));
+    } else {
+      input.addEventListener("change", () => send({ type: "start", settings: settings() }));
+    }
   }
   $("start").addEventListener("click", () => send({ type: "start", settings: settings() }));
   $("stop").addEventListener("click", () => send({ type: "stop" }));
@@ -163,6 +169,10 @@ function receive(m) {
     state.accepted = { on_screen: current ? current.index : null, target: m.target };
     for (const key of ["speed", "step_length", "step_frequency"]) {
       const p = document.querySelector(`.control[data-field="walk.${key}"] .refusal`);
+      if (p && key in m.target) p.textContent = "";
+    }
+    for (const name of Object.keys(m.target.attributes || {})) {
+      const p = document.querySelector(`.control[data-field="attributes.${name}"] .refusal`);
       if (p) p.textContent = "";
     }
   } else if (m.type === "stopping") {
@@ -181,7 +191,8 @@ function receive(m) {
 // -- playback ----------------------------------------------------------------------------------
 function begin(step) {
   current = step;
-  state.shown.push({ index: step.index, step_frequency: step.step_frequency, speed: step.speed });
+  state.shown.push({ index: step.index, step_frequency: step.step_frequency, speed: step.speed,
+                     pelvic_list: step.attributes.pelvic_list });
   scene.addFootprint(step.foot, step.stance_leg);
   strips.add(step);
   $("step").textContent = step.index + (step.closing ? " (closing)" : "");
