@@ -172,9 +172,13 @@ def swing_foot_schedule(context: np.ndarray) -> SwingFoot:
     return SwingFoot(**{name: float(context[SWING_CONTEXT.index[f"foot_{name}"]]) for name in SCHEDULE_FIELDS})
 
 
-def swing_ankle_heights(body, origin_x: float, name: str, dense: Dense) -> np.ndarray:
-    """Height above the ground (m) of the swing ankle at the dense samples of a swing subphase."""
+def swing_ankle_heights(body, origin_x: float, name: str, dense: Dense, pelvis=None) -> np.ndarray:
+    """Height above the ground (m) of the swing ankle at the dense samples of a swing subphase;
+    given the step's ``pelvis``, of the leg hanging from the pelvis's other hip as it was solved
+    (kinematics/pelvis.py), else from the stance hip."""
     hips = world_hips(body, dense.x, origin_x)
+    if pelvis is not None:
+        hips = pelvis.swing_side_hips(dense.t, hips)
     theta3 = dense.x[:, 6]
     theta4 = dense.x[:, 7] if name != "swing3" else np.zeros(len(dense.t))
     return hips[:, 1] - body.l3 * np.cos(theta3) - body.l4 * np.cos(theta3 + theta4)

@@ -22,7 +22,7 @@ from klaw_ocp.control import curve_p as ds
 from klaw_ocp.control.gains import control_gains
 from klaw_ocp.control.step import body_context
 from klaw_ocp.control.stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS, stance_forces
-from klaw_ocp.control.swing_law import (SWING_CONTEXT, curve_p, swing1_forces, swing1_rhs, swing2_torques,
+from klaw_ocp.control.swing_law import (RETRACTION_START_SHARE, SWING_CONTEXT, curve_p, swing1_forces, swing1_rhs, swing2_torques,
                                         swing3_torque)
 from klaw_ocp.control.torques import (decaying_exponential, hip_height_reference, leg_force, spring_damper,
                                       step_torque)
@@ -201,10 +201,19 @@ def test_swing_torques_are_the_paper_shapes():
     f3, f4 = s2(x2, 0.39, [-4.0, -0.02, 1.5], c)
     assert f3[0] == pytest.approx(80.0 * (-0.33 - 0.02 + 0.25) - 9.0 * 0.4)
     assert f4[0] == pytest.approx(1.5 - 4.0 * (1 / math.e - 0.3))
-    # swing3: the hold about the heel-strike angle (no actuator) plus the constant moment
+    # swing3: the hold (no actuator) plus the constant moment, about the thigh's reference: the
+    # peak until RETRACTION_START_SHARE of t1 -> heel strike, then to the heel-strike angle on
+    # 3s^2 - 2s^3, the damper on the rate against the reference's
     s3 = as_function(swing3_torque, 8, 1, 1, nc)
     x3 = np.r_[x1[:6], -0.28, 0.3]
-    assert s3(x3, 0.55, [1.5], c)[0][0] == pytest.approx(80.0 * (-0.3 + 0.28) - 9.0 * 0.3 + 1.5)
+    t_r = 0.35 + RETRACTION_START_SHARE * (0.6 - 0.35)
+    s = (0.55 - t_r) / (0.6 - t_r)
+    ref, rate = -0.33 + 0.03 * (3 * s ** 2 - 2 * s ** 3), 0.03 * 6 * s * (1 - s) / (0.6 - t_r)
+    assert s3(x3, 0.55, [1.5], c)[0][0] == pytest.approx(80.0 * (ref + 0.28) - 9.0 * (0.3 - rate) + 1.5)
+    # the peak at the heel-strike angle: the paper's hold about it
+    assert s3(x3, 0.55, [1.5], swing_context(theta3_peak=-0.3))[0][0] == pytest.approx(80.0 * (-0.3 + 0.28) - 9.0 * 0.3 + 1.5)
+    assert s2(x2, 0.5, [-4.0, -0.02, 1.5], swing_context(theta3_peak=-0.3))[0][0] == \
+        pytest.approx(80.0 * (-0.3 - 0.02 + 0.25) - 9.0 * 0.4)
 
 
 # -- curve P ------------------------------------------------------------------------------------

@@ -255,6 +255,9 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
     # the attributes a step may have of its own (a schedule's), as it walked with them
     attrs = step.plan.attributes if step.plan.attributes is not None else spec.attributes
     entry["attributes"] = {name: attrs.get(name) for name in STEP_ATTRIBUTES}
+    # the thigh's peak ahead of its heel-strike angle: the attribute, or more where the swing leg
+    # needed it to clear the ground (control/swing_clearance.py)
+    entry["thigh_retraction_deg"] = float(step.thigh_retraction_deg)
     entry.update(stance_leg=stance_leg(step.index), origin_x_m=step.origin_x,
                  hind_ankle_x_m=step.hind_ankle_x, heel_clearance_min_m=step.heel_clearance_min,
                  **peak_swing_hip_torque(step, spec.body.mass),

@@ -29,6 +29,7 @@ from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
+from .swing_clearance import clearance_retraction
 from .step_stages import (CurveP, DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
                           step_pelvis, swing_context, with_curve_p)
 from .swing_spec import swing_specs
@@ -158,6 +159,10 @@ class StepResult:
     swing_foot: SwingFoot
     #: the pelvis's rotation and list about the stance hip (§4.2), which carry the swing leg's hip
     pelvis: PelvisSchedule
+    #: how far ahead of its heel-strike angle the thigh peaked at t1 (deg): the attribute
+    #: ``terminal_swing_retraction``, or more where the swing leg needed it to clear the ground
+    #: (control/swing_clearance.py)
+    thigh_retraction_deg: float = 0.0
 
     def subphase(self, name: str) -> SubphaseSolution:
         return next(s for s in self.subphases if s.name == name)
@@ -204,6 +209,8 @@ class StepController:
         prepare_kernels(solver, lock_rule)
         self.guesses: dict = {}
         self.previous_states: dict = {}
+        #: the thigh retraction the last step needed (deg), the next step's first try
+        self.retraction_hint: float | None = None
         torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1
         stance_scale = {"F_theta1_magnitude": torque, "F_theta1_brake": torque}
         self.stance_scale = {n: stance_scale.get(n, STANCE_OTHER_SCALE) for n in STANCE_PARAMETERS.names}
@@ -296,13 +303,23 @@ class StepController:
         pelvis = step_pelvis(b, a, plan, inp.stance_standing, inp.pelvis_rotation)
         other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
         ds = hind_leg_double_support(a, plan, stance, other_hips, other_vels, inp.hind_foot)
-        t1 = t.t_ds + t.t_swing1_end
-        node_t1 = node_at(stance.t, t1)
-        curve = plan_curve_p(b, a, plan, ds, other_hips[node_t1], other_vels[node_t1])
-        c = swing_context(b, a, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
-        x_to = stance.states[node_at(stance.t, t.t_ds)]
-        swings = self.solve_swings(plan, index, x_to, ds, c, None if at_rest or solved_without_events(stance) else stance.events,
-                                   stance.t[node_at(stance.t, t.t_ds)], curve)
+        node_t1, node_to = node_at(stance.t, t.t_ds + t.t_swing1_end), node_at(stance.t, t.t_ds)
+        events = None if at_rest or solved_without_events(stance) else stance.events
+
+        def swings_with(retraction_deg: float):
+            # curve P, the swing foot and the swing context are planned about the thigh's peak
+            a_r = a if retraction_deg == a.terminal_swing_retraction else \
+                a.with_overrides({"terminal_swing_retraction": retraction_deg})
+            curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
+            c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
+            return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
+        # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the
+        # ankle would pass lower than l9 (control/swing_clearance.py); not in a closing step, whose
+        # thigh lands vertical under a hip still rising: a thigh ahead lifts its ankle little there
+        (swings, _, curve, c), retraction = (swings_with(a.terminal_swing_retraction), a.terminal_swing_retraction) \
+            if at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction,
+                                                 self.retraction_hint)
+        self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],
                           double_support=ds.as_dict(), curve_p=curve.as_dict(),
@@ -313,7 +330,7 @@ class StepController:
                                          "excursion": inp.excursion, "rise": stance_ctx["hip_rise"],
                                          "fall": stance_ctx["hip_fall"], "power": stance_ctx["hip_fall_power"]},
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
-                          stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis)
+                          stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis, thigh_retraction_deg=retraction)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
                      stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:

@@ -1,8 +1,9 @@
 """The three swing subphases as boundary-value problems (section 4.3).
 
 - ``swing1`` (toe-off to 50 % of t_swing): unknowns F_theta3's fall and mean; theta3 reaches its
-  peak at t1 (its eq. 3 value, or ``terminal_swing_retraction`` ahead of it) with theta3d = 0
-  ("the hip angle reaches a maximum", §4.3).
+  peak at t1 (its eq. 3 value, or ``terminal_swing_retraction`` ahead of it, or further ahead
+  where the swing ankle needs it: control/swing_clearance.py) with theta3d = 0 ("the hip angle
+  reaches a maximum", §4.3).
 - ``swing2`` (to 85 %): unknowns F_theta4's fall and mean and the hip position actuator of the
   recovery loop (held at 0 unless the toe would not clear the ground); the knee reaches full
   extension (theta4 = 0) at t2 with theta4d = 0, so that swing3's lock is not an impact. Path

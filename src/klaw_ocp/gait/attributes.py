@@ -150,9 +150,10 @@ _SPECS = [
           "deg/s a frame at 100 fps; at 2 swing2 would only brake), " + _OURS),
     _spec("swing", "terminal_swing_retraction", "deg", 0.0, 0.0, 15.0,
           "§4.3: the hip angle 'reaches a maximum' at t1 and holds in swing2; how far that peak is "
-          "ahead of the heel-strike angle (eq. 3), which swing3 retracts to, as people's thighs "
-          "do in terminal swing (the heel higher in swing2 and swing3, at about 0.15 N m/kg more "
-          "peak hip torque per degree at 5 km/h), " + _OURS),
+          "ahead of the heel-strike angle (eq. 3), which the hold retracts to from about the middle "
+          "of swing2, as people's thighs do in terminal swing (the heel and the ankle higher, at "
+          "about 0.17 N m/kg more peak hip torque per degree at 5 km/h); a step whose swing ankle "
+          "would pass below l9 takes more, the least that clears (docs/human-gait.md), " + _OURS),
     _spec("swing", "hip_hold_frequency", "Hz", 1.5, 0.1, 20.0,
           "§4.3 swing2: hip torque 'a spring and damping model to hold the thigh in place'; "
           "natural frequency " + _OURS),
