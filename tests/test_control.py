@@ -171,7 +171,7 @@ def swing_context(**values):
                foot_theta6_heel_strike=0.0, foot_theta5_rate_toe_off=0.0, foot_theta4_t1=0.9, k_h=80.0, d_h=9.0, theta3_target=-0.3, theta3_peak=-0.33, tau3=0.05,
                exp3_mean=0.2, exp4_mean=0.3,
                P0=0.0, P1=0.0, P2=0.0, P3=0.0, P4=0.1, curve_x0=0.0, baumgarte=50.0, swing2_start=0.35, tau4=0.04,
-               pelvis_width=0.18, pelvis_rotation_start=0.0, pelvis_rotation_end=0.0, pelvis_list=0.0)
+               pelvis_width=0.18, pelvis_rotation_start=0.0, pelvis_rotation_end=0.0, pelvis_list=0.0, hold_offset=0.0)
     ctx.update(values)
     return SWING_CONTEXT.pack(ctx)
 
@@ -210,9 +210,18 @@ def test_swing_torques_are_the_paper_shapes():
     s = (0.55 - t_r) / (0.6 - t_r)
     ref, rate = -0.33 + 0.03 * (3 * s ** 2 - 2 * s ** 3), 0.03 * 6 * s * (1 - s) / (0.6 - t_r)
     assert s3(x3, 0.55, [1.5], c)[0][0] == pytest.approx(80.0 * (ref + 0.28) - 9.0 * (0.3 - rate) + 1.5)
+    # swing2's recovery shift fades out over the retraction window, into swing3 (hold_offset)
+    with_shift = swing_context(hold_offset=-0.02)
+    assert s3(x3, 0.55, [1.5], with_shift)[0][0] == pytest.approx(
+        80.0 * (ref - 0.02 * (1 - (3 * s ** 2 - 2 * s ** 3)) + 0.28) - 9.0 * (0.3 - rate - 0.02 * 6 * s * (1 - s) / (0.6 - t_r)) + 1.5)
+    f3_late, _ = s2(x2, 0.47, [-4.0, -0.02, 1.5], c)
+    q = (0.47 - t_r) / (0.6 - t_r)
+    ref2, rate2 = -0.33 + 0.03 * (3 * q ** 2 - 2 * q ** 3), 0.03 * 6 * q * (1 - q) / (0.6 - t_r)
+    shift, shift_rate = -0.02 * (1 - (3 * q ** 2 - 2 * q ** 3)), 0.02 * 6 * q * (1 - q) / (0.6 - t_r)
+    assert f3_late[0] == pytest.approx(80.0 * (ref2 + shift + 0.25) - 9.0 * (0.4 - rate2 - shift_rate))
     # the peak at the heel-strike angle: the paper's hold about it
     assert s3(x3, 0.55, [1.5], swing_context(theta3_peak=-0.3))[0][0] == pytest.approx(80.0 * (-0.3 + 0.28) - 9.0 * 0.3 + 1.5)
-    assert s2(x2, 0.5, [-4.0, -0.02, 1.5], swing_context(theta3_peak=-0.3))[0][0] == \
+    assert s2(x2, 0.42, [-4.0, -0.02, 1.5], swing_context(theta3_peak=-0.3))[0][0] == \
         pytest.approx(80.0 * (-0.3 - 0.02 + 0.25) - 9.0 * 0.4)
 
 

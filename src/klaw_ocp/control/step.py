@@ -32,13 +32,13 @@ from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nod
 from .swing_clearance import clearance_retraction
 from .step_stages import (CurveP, DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
                           step_pelvis, swing_context, with_curve_p)
+from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
-#: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust
-#: regions and tolerances then act alike on each). F_theta1: 5 % of the body's weight times l1;
-#: the stance's pa knots and offset 2 cm; swing1's F_theta3 amplitude 20 % of the leg's weight
-#: times l1 (its fall and mean); swing2's knee fall and mean 10 % of the shank's weight times l4 and its recovery actuator
-#: 0.05 rad; swing3's heel-down moment 5 % of the leg's weight times l1.
+#: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust regions
+#: and tolerances then act alike on each). F_theta1: 5 % of the body's weight times l1; the stance's pa
+#: knots and offset 2 cm; swing1's F_theta3 fall and mean 20 % of the leg's weight times l1; swing2's knee
+#: fall and mean 10 % of the shank's weight times l4, its recovery actuator 0.05 rad; swing3's moment 5 %.
 F_THETA1_SCALE_REL = 0.05
 STANCE_OTHER_SCALE = 0.02
 SWING1_SCALE_REL = 0.2
@@ -48,6 +48,7 @@ SWING3_SCALE_REL = 0.05
 #: Swing2's recovery (§4.3): where the toe would touch the ground, the thigh's holding target is
 #: moved by steps of this much (rad; negative: the thigh further forward, the hip torque larger).
 SWING2_RECOVERY_STEP = -0.005
+_HOLD_OFFSET = SWING_CONTEXT.index["hold_offset"]
 #: swing1's continuation (:meth:`StepController.solve_swing1`): the shares of curve P's end slope,
 #: and its name among a solve's fallbacks (summary.json, docs/solvers.md)
 SWING1_CONTINUATION = (0.0, 0.5, 1.0)
@@ -220,8 +221,7 @@ class StepController:
                        "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
     def step_attributes(self, plan):
-        """The attributes of the step ``plan`` plans (its schedule's values of the attributes that
-        may change per step), the walk's where the plan carries none."""
+        """The attributes of the step ``plan`` plans (a schedule's per step), else the walk's."""
         return self.attrs if plan.attributes is None else plan.attributes
 
     # -- contexts ------------------------------------------------------------------------------
@@ -365,9 +365,11 @@ class StepController:
         x_end2 = s2.final_state
         knee = knee_lock_map(self.body, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         mode3 = lock_mode(s2.events, mode=mode2)
+        c3 = lock_context(c, mode3)        # with swing2's recovery shift, fading on in swing3
+        c3[_HOLD_OFFSET] = s2.parameters["hip_actuator"]
         s3 = self._solve(index, SubphaseProblem(
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], knee[2]]]),
-            time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), lock_context(c, mode3), self._guess("swing3", 1),
+            time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c3, self._guess("swing3", 1),
             self.scales["swing3"], mode=mode3))
         return [s1, s2, s3]
 

@@ -255,6 +255,6 @@ def swing_context(body: Body, attrs, gains, plan, stance_context: dict, stance_p
                tau3=tau3, exp3_mean=exponential_mean(t1 - t_to, tau3), curve_x0=curve.x0, baumgarte=CURVE_P_BAUMGARTE,
                swing2_start=t1, tau4=tau4, exp4_mean=exponential_mean(t2 - t1, tau4), pelvis_width=pelvis.width,
                pelvis_rotation_start=pelvis.rotation_start, pelvis_rotation_end=pelvis.rotation_end,
-               pelvis_list=pelvis.list_peak,
+               pelvis_list=pelvis.list_peak, hold_offset=0.0,
                **{f"P{i}": curve.coefficients[i] for i in range(5)})
     return SWING_CONTEXT.pack(ctx)

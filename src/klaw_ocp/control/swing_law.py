@@ -64,7 +64,7 @@ SWING_CONTEXT = VectorLayout(
      "toe_off_time", "swing_end_time", *FOOT_CONTEXT,
      "k_h", "d_h", "theta3_target", "theta3_peak", "tau3", "exp3_mean", "P0", "P1", "P2", "P3", "P4", "curve_x0", "baumgarte",
      "swing2_start", "tau4", "exp4_mean", "pelvis_width", "pelvis_rotation_start", "pelvis_rotation_end",
-     "pelvis_list"],
+     "pelvis_list", "hold_offset"],
 )
 SWING_FORCES = ("F_w", "F_theta1", "F_theta2", "pa", "F_theta3", "F_theta4")
 SWING1_STATE = ("w", "theta1", "theta2", "wd", "theta1d", "theta2d", "theta3", "theta4", "theta3d")
@@ -162,24 +162,37 @@ def thigh_reference(t, c):
     a maximum" at t1; people's thighs retract in terminal swing). Where the peak is the
     heel-strike angle it is that angle throughout, the paper's hold."""
     n = names(c)
-    t_r = n.swing2_start + RETRACTION_START_SHARE * (n.swing_end_time - n.swing2_start)
-    span = n.swing_end_time - t_r
-    s = ca.fmin(ca.fmax((t - t_r) / span, 0), 1)
-    shape, rate = s * s * (3 - 2 * s), 6 * s * (1 - s) / span
+    shape, rate = _retraction(t, c)
     return n.theta3_peak + (n.theta3_target - n.theta3_peak) * shape, (n.theta3_target - n.theta3_peak) * rate
 
 
-def _hold(th3, th3d, c, target, actuator=0, target_rate=0):
+def _retraction(t, c):
+    """S(s) = 3s² − 2s³ over the retraction window (RETRACTION_START_SHARE of t1 -> heel strike,
+    to heel strike), 0 before it, and its time derivative."""
     n = names(c)
-    return spring_damper(th3, th3d - target_rate, n.k_h, n.d_h, target, actuator)
+    t_r = n.swing2_start + RETRACTION_START_SHARE * (n.swing_end_time - n.swing2_start)
+    span = n.swing_end_time - t_r
+    s = ca.fmin(ca.fmax((t - t_r) / span, 0), 1)
+    return s * s * (3 - 2 * s), 6 * s * (1 - s) / span
+
+
+def _hold(th3, th3d, t, c, actuator):
+    """The swing hold about :func:`thigh_reference`, its target shifted by the recovery
+    actuator (§4.3: moved forward where the toe would touch the ground) until the retraction
+    window, then the shift fading out with the retraction: a shift held to t2 and dropped there
+    was retracted by swing3's constant moment alone (a closing step's 4.2 N m/kg at 5 km/h)."""
+    n = names(c)
+    ref, rate = thigh_reference(t, c)
+    shape, shape_rate = _retraction(t, c)
+    target, target_rate = ref + actuator * (1 - shape), rate - actuator * shape_rate
+    return spring_damper(th3, th3d - target_rate, n.k_h, n.d_h, target)
 
 
 def swing2_torques(x, t, u, c):
     """F_theta3 (the hold at the thigh's peak, shifted by the recovery actuator u[1]) and F_theta4,
     u = (fall, actuator, mean)."""
     n = names(c)
-    ref, rate = thigh_reference(t, c)
-    return _hold(x[6], x[8], c, ref, u[1], rate), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
+    return _hold(x[6], x[8], t, c, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 
 def swing2_rhs(x, t, u, c):
@@ -204,8 +217,9 @@ def swing2_clearance(x, t, u, c):
 
 
 def swing3_torque(x, t, u, c):
-    ref, rate = thigh_reference(t, c)
-    return _hold(x[6], x[7], c, ref, 0, rate) + u[0]
+    """The hold (with swing2's recovery shift fading on, ``hold_offset``) plus the constant moment
+    that lands the thigh at its heel-strike angle."""
+    return _hold(x[6], x[7], t, c, names(c).hold_offset) + u[0]
 
 
 def swing3_rhs(x, t, u, c):
