@@ -112,12 +112,12 @@ class StepwiseWalk:
         #: each planned step's (v, sl) as given to eq. 1 (the completed speed may differ from it
         #: in the last bit, so the schedule carries these, not the completed ones)
         self._requested = [self._base]
-        #: the values of the attributes that may change per step asked for (STEP_ATTRIBUTES), and
-        #: each planned step's
-        self._target_attributes = self._step_values(self.attributes)
-        self._step_attributes = [self._target_attributes]
+        #: each planned step's values of the attributes that may change per step (STEP_ATTRIBUTES)
+        self._step_attributes = [self._step_values(self.attributes)]
         self._parameters = [self._complete(*self._base, "walk")]
-        self._target = self._base
+        #: what was asked for last: the (v, sl) to move to and the per-step attributes' values, one
+        #: tuple so that a request from another thread is taken whole by the next plan
+        self._asked = (self._base, self._step_attributes[0])
         self._plans = [plan_step(self.body, self.attributes, 0, self._parameters[0], 0.0, 0.0,
                                  spec.start_from_rest)]
         self._stop_asked = False
@@ -160,17 +160,17 @@ class StepwiseWalk:
                                     field_prefix="walk")
             check_step_length(self.body, p, len(self._plans))
             target = {"speed": p.speed_kmh, "step_length": p.step_length_m, "step_frequency": p.step_frequency_spm}
-        step_values = dict(zip(STEP_ATTRIBUTES, self._target_attributes))
+        asked_target, asked_values = self._asked
+        step_values = dict(zip(STEP_ATTRIBUTES, asked_values))
         for name, value in (attributes or {}).items():
             if name not in STEP_ATTRIBUTES:
                 raise ConfigError(out_of_range(f"attributes.{name}", value, "an attribute that may change per "
                                                "step: " + ", ".join(STEP_ATTRIBUTES)))
             step_values[name] = ATTRIBUTES[name].check(value)
-        if values:
-            self._target = (target["speed"], target["step_length"])
         if attributes:
-            self._target_attributes = tuple(step_values[name] for name in STEP_ATTRIBUTES)
             target["attributes"] = step_values
+        self._asked = ((target["speed"], target["step_length"]) if values else asked_target,
+                       tuple(step_values[name] for name in STEP_ATTRIBUTES))
         return target
 
     @staticmethod
@@ -188,15 +188,15 @@ class StepwiseWalk:
         """End the walk at rest: the next step planned is the closing step (sl = 0)."""
         self._stop_asked = True
 
-    def _ramped(self, previous: tuple) -> tuple:
+    def _ramped(self, previous: tuple, target: tuple) -> tuple:
         """The next step's (v, sl): the target, or as far towards it as the per-step limits allow
         (speed and step length moving together, a straight line as a schedule's ramp)."""
-        dv, dsl = self._target[0] - previous[0], self._target[1] - previous[1]
+        dv, dsl = target[0] - previous[0], target[1] - previous[1]
         dv_max = self.attributes.max_speed_change_per_step
         dsl_max = self.attributes.max_step_length_change_rel * self.body.l1
         steps = max(abs(dv) / dv_max, abs(dsl) / dsl_max)
         if steps <= 1.0:
-            return self._target
+            return target
         # a hair inside the limit, so that rounding never puts a step over it
         n = math.ceil(steps * (1 + 1e-9))
         return previous[0] + dv / n, previous[1] + dsl / n
@@ -213,8 +213,8 @@ class StepwiseWalk:
             self._closing_at = i
             return closing_step(self.body, self.attributes, last)
         previous = self._requested[-1]
-        wanted = self._ramped(previous)
-        step_values = self._target_attributes
+        target, step_values = self._asked
+        wanted = self._ramped(previous, target)
         attrs = self._attributes_of(step_values)
         try:
             p = self._complete(*wanted, f"walk.schedule[{i}]") if wanted != previous else self._parameters[-1]
@@ -222,7 +222,7 @@ class StepwiseWalk:
             check_step_changes(self.body, [last.parameters, plan.parameters], self.attributes)
         except GaitLimitError as err:     # not reachable from a checked target; kept safe all the same
             self.refusals.append(str(err))
-            self._target, wanted, p = previous, previous, self._parameters[-1]
+            self._asked, wanted, p = (previous, step_values), previous, self._parameters[-1]
             plan = plan_step(self.body, attrs, i, p, t, x, self.spec.start_from_rest)
         self._step_attributes.append(step_values)
         self._requested.append(wanted)
