@@ -10,7 +10,7 @@ l9 + :data:`CLEARANCE_MARGIN_REL` l1 (:func:`clearance_retraction`), as people's
 of their landing angle and retract in terminal swing. The hold's target then retracts over the
 rest of the swing (:func:`klaw_ocp.control.swing_law.thigh_reference`), which costs a fraction of
 the hip torque a retraction in swing3 alone did. Steps that clear the ground keep the walk's
-``terminal_swing_retraction`` (0 by default), to the bit.
+``terminal_swing_retraction`` (0 by default) exactly.
 """
 from __future__ import annotations
 
