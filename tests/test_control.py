@@ -121,7 +121,7 @@ def test_hip_height_reference_ends_low_peaks_mid_step_with_flat_ends():
 def stance_setup():
     ctx = body_context(BODY)
     ctx.update(k_w=2e4, v_w=500.0, k_t=300.0, d_t=40.0, theta2_ref=0.05, k_y=10.0, c_y=0.05, t_off=0.24,
-               t_step=0.6, y_start=0.85, y_end=0.86, excursion=0.03, hip_rise=0.5, hip_fall=0.5, hip_fall_power=1.0,
+               t_step=0.6, y_start=0.85, y_end=0.86, excursion=0.03, hip_rise=0.5, hip_fall=0.5, hip_fall_power=1.0, hip_settle=1.0,
                locked=0.0, theta1_target=0.3, w_target=0.87)
     p = dict(F_theta1_magnitude=30.0, pa_offset=0.01, F_theta1_brake=-5.0,
              **{k: 0.001 * i for i, k in enumerate(PA_KNOTS)})

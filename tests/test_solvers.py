@@ -35,7 +35,7 @@ def stance_problem(speed_factor=1.33, theta1_target=None, x0=None, y_ref=None, *
     y = con.hip_y - body.l9 if y_ref is None else y_ref
     ctx.update(k_w=g.k_w, v_w=g.v_w, k_t=g.k_t, d_t=g.d_t, theta2_ref=0.0, k_y=g.k_y, c_y=g.c_y,
                t_off=tim.t_theta1_off, t_step=tim.t_step, y_start=y, y_end=y, excursion=0.04, hip_rise=0.5, hip_fall=0.5,
-               hip_fall_power=1.0, locked=0.0,
+               hip_fall_power=1.0, locked=0.0, hip_settle=1.0,
                theta1_target=con.theta1 if theta1_target is None else theta1_target, w_target=con.w)
     v = speed_factor * con.step_length / tim.t_step
     if x0 is None:

@@ -66,8 +66,12 @@ def test_each_steps_frames_are_the_whole_walks_frames(session):
     assert [r.index for r in ready] == list(range(len(live.walk.steps)))
     t = np.concatenate([r.frames.t for r in ready])
     assert np.array_equal(t, whole.t)       # every frame once, in order
-    # the window's step coordinate u = k + tau/t_step rounds a few ulps differently
-    np.testing.assert_allclose(np.vstack([r.frames.angles for r in ready]), whole.angles, rtol=0, atol=1e-9)
+    # the window's step coordinate u = k + tau/t_step rounds a few ulps differently; where the
+    # closing step's foot comes down grazing the ground (its ankle within a millimetre of l9), the
+    # ground guard's limits, a square root of the ankle's height above l9, make that 2e-8 rad
+    angles = np.vstack([r.frames.angles for r in ready])
+    np.testing.assert_allclose(angles[:-len(ready[-1].frames.t)], whole.angles[:-len(ready[-1].frames.t)], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(angles, whole.angles, rtol=0, atol=1e-7)
     np.testing.assert_allclose(np.vstack([r.frames.root for r in ready]), whole.root, rtol=0, atol=1e-9)
 
 

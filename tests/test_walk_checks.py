@@ -226,29 +226,32 @@ def test_the_turned_swing_foot_stays_above_the_ground_wherever_a_foot_fits():
 
 #: how far below its nodes' parabola the continuous model's lowest ankle may pass (m)
 ANKLE_DIP_BETWEEN_NODES = 2e-4
+#: a closing step's leg comes down straight and vertical beside the stance leg while the hip rises
+#: its last millimetre to standing height (control.step_stages.closing_hip_settle): its ankle may be
+#: this much below l9 (m; 1.2 mm at 9 km/h on the coarse grid; 2-15 mm before the closing hip rose by t2)
+CLOSING_ANKLE_DIP = 1.5e-3
 
 
-def test_the_dynamic_swing_ankle_clears_l9_in_every_step_but_closing_steps():
+def test_the_dynamic_swing_ankle_clears_l9_in_every_step():
     """Issue #36 item 6: the dynamic leg, hanging from the pelvis's other hip as it was solved, keeps
     its ankle at least l9 above the ground through swing2 and swing3 (where the shank passes under
     the knee) in every step of the coarse grid in both modes, first steps from rest included, in
     the continuous model (the dense re-integration): the thigh's peak is planned ahead where it
-    must be (control/swing_clearance.py), so the body lifts no foot there. Closing steps, whose
-    thigh lands vertical under a hip still rising to standing height, are not met (docs/human-gait.md)."""
+    must be (control/swing_clearance.py), so the body lifts no foot there; closing steps, whose
+    hip rises to standing height by t2 and which do not list, within CLOSING_ANKLE_DIP."""
     low, checked, planned = [], 0, 0
     for method in METHODS:
         for point in COARSE:
             recorded = coarse_walk(method, point)
             for step in recorded.walk.steps:
-                if step.index == len(recorded.walk.spec.plans):
-                    continue
+                closing = step.index == len(recorded.walk.spec.plans)
                 planned += step.thigh_retraction_deg > 0
                 for name in ("swing2", "swing3"):
                     dense = recorded.dense(step.index, name)
                     inside = dense.t < step.plan.timings.t_step - 1e-9
                     y = swing_ankle_heights(recorded.body, step.origin_x, name, dense, step.pelvis)[inside]
                     checked += len(y)
-                    if y.min() < recorded.body.l9 - ANKLE_DIP_BETWEEN_NODES:
+                    if y.min() < recorded.body.l9 - (CLOSING_ANKLE_DIP if closing else ANKLE_DIP_BETWEEN_NODES):
                         low.append(f"{method} {point} step {step.index} {name}: {1000 * (y.min() - recorded.body.l9):.2f} mm")
     assert checked > 1000 and planned > 0 and not low, "\n".join(low)
 

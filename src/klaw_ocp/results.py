@@ -130,7 +130,7 @@ def _hip_reference_curves(steps, body, times: list) -> list:
     t_local = np.concatenate([np.asarray(t, float) - step.t_start for step, t, r in zip(steps, times, ref) if r])
     shape = [per_row(lambda s, k=k: s.hip_reference[k]) for k in ("y_start", "y_end", "excursion")]
     # (a result from before the bump's shape was recorded had the paper's mid-step sinusoid)
-    shape += [per_row(lambda s, k=k, v=v: s.hip_reference.get(k, v)) for k, v in (("rise", 0.5), ("fall", 0.5), ("power", 1.0))]
+    shape += [per_row(lambda s, k=k, v=v: s.hip_reference.get(k, v)) for k, v in (("rise", 0.5), ("fall", 0.5), ("power", 1.0), ("settle", 1.0))]
     y, _ = hip_height_reference(t_local, per_row(lambda s: s.plan.timings.t_step), *shape)
     values = iter(np.split(y + body.l9, np.cumsum(sizes)[:-1]))
     for i, r in enumerate(ref):

@@ -35,7 +35,8 @@ STANCE_PARAMETERS = VectorLayout(["F_theta1_magnitude", "pa_offset", "F_theta1_b
 STANCE_CONTEXT = VectorLayout(
     DYNAMIC_PARAMETER_NAMES,
     ["k_w", "v_w", "k_t", "d_t", "theta2_ref", "k_y", "c_y",
-     "t_off", "t_step", "y_start", "y_end", "excursion", "hip_rise", "hip_fall", "hip_fall_power", "locked", "theta1_target", "w_target"],
+     "t_off", "t_step", "y_start", "y_end", "excursion", "hip_rise", "hip_fall", "hip_fall_power", "locked", "theta1_target", "w_target",
+     "hip_settle"],
 )
 STANCE_FORCES = ("F_w", "F_theta1", "F_theta2", "pa")
 STANCE_PATH = ("leg_lock_margin", "hip_above_floor", "hip_vertical_velocity")
@@ -67,7 +68,8 @@ def stance_forces(x, t, p, c):
     the parameter vector ``p`` laid out as :data:`STANCE_PARAMETERS`."""
     n, q = STANCE_CONTEXT.bind(c), STANCE_PARAMETERS.bind(p)
     y, yd = hip_height(x)
-    y_ref, yd_ref = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion, n.hip_rise, n.hip_fall, n.hip_fall_power)
+    y_ref, yd_ref = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion, n.hip_rise, n.hip_fall,
+                                         n.hip_fall_power, n.hip_settle)
     knots = [getattr(q, k) for k in PA_KNOTS]
     command = q.pa_offset * late_extension(t, n.t_step) + piecewise_linear(t / n.t_step, knots)
     pa = position_actuator(command, n.k_y, n.c_y, y_ref, yd_ref, y, yd)
@@ -118,7 +120,8 @@ def tracking_residuals(x, t, p, c):
     monitored formulation (the two overlap after mid-step), so the offset is priced too."""
     n, q = STANCE_CONTEXT.bind(c), STANCE_PARAMETERS.bind(p)
     y, _ = hip_height(x)
-    y_ref, _ = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion, n.hip_rise, n.hip_fall, n.hip_fall_power)
+    y_ref, _ = hip_height_reference(t, n.t_step, n.y_start, n.y_end, n.excursion, n.hip_rise, n.hip_fall,
+                                    n.hip_fall_power, n.hip_settle)
     knots = ca.vertcat(*[getattr(q, k) for k in PA_KNOTS])
     kinks = ca.diff(ca.diff(knots))
     return ca.vertcat((y - y_ref) / TRACKING_SCALE_M, 0.1 * kinks / TRACKING_SCALE_M, 0.1 * q.pa_offset / TRACKING_SCALE_M)

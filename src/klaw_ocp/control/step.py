@@ -30,8 +30,8 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_clearance import clearance_retraction
-from .step_stages import (CurveP, DoubleSupport, hind_leg_double_support, node_at, plan_curve_p, stance_leg_rules,
-                          step_pelvis, swing_context, with_curve_p)
+from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support, node_at,
+                          plan_curve_p, stance_leg_rules, step_pelvis, swing_context, with_curve_p)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -232,7 +232,7 @@ class StepController:
                    t_off=t.t_theta1_off, t_step=t.t_step, y_start=inp.y_start,
                    y_end=plan.constraints.hip_y - b.l9, excursion=inp.excursion,
                    hip_rise=self.attrs.hip_rise_fraction, hip_fall=self.attrs.hip_fall_fraction,
-                   hip_fall_power=self.attrs.hip_fall_power, locked=0.0,
+                   hip_fall_power=self.attrs.hip_fall_power, locked=0.0, hip_settle=closing_hip_settle(plan),
                    theta1_target=plan.constraints.theta1, w_target=plan.constraints.w)
         return ctx
 
@@ -326,9 +326,9 @@ class StepController:
                           final_stance_state=stance.final_state,
                           heel_clearance_min=self.heel_clearance_min(swings[-1], c),
                           plan=plan, notes=lock_rule_notes(stance, b.l1),
-                          hip_reference={"y_start": inp.y_start, "y_end": stance_ctx["y_end"],
-                                         "excursion": inp.excursion, "rise": stance_ctx["hip_rise"],
-                                         "fall": stance_ctx["hip_fall"], "power": stance_ctx["hip_fall_power"]},
+                          hip_reference={"y_start": inp.y_start, "y_end": stance_ctx["y_end"], "excursion": inp.excursion,
+                                         **{k: stance_ctx[f"hip_{k}"] for k in ("rise", "fall", "settle")},
+                                         "power": stance_ctx["hip_fall_power"]},
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
                           stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis, thigh_retraction_deg=retraction)
 

@@ -125,17 +125,30 @@ def node_at(t_nodes: np.ndarray, time: float) -> int:
     return int(np.argmin(np.abs(t_nodes - time)))
 
 
+def closing_hip_settle(plan) -> float:
+    """The share of a step by which its hip-height reference has reached the next heel strike's
+    height (:func:`klaw_ocp.control.torques.hip_height_reference`): 1 (the paper's), but t2 in a
+    walk's closing step, which rises to standing height: its swing leg, coming down straight and
+    vertical beside the stance leg from t2 on, then finds the hip high enough for a foot (issue #36
+    item 6; people rise as the last foot comes down)."""
+    t = plan.timings
+    return (t.t_ds + t.t_swing2_end) / t.t_step if plan.constraints.step_length == 0 else 1.0
+
+
 def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool, rotation_start: float | None = None) -> PelvisSchedule:
     """The pelvis of a step (§4.2): its list at mid-step is the attribute's; its rotation at this
     step's heel strike ``rotation_start``, the one the step before ended with (default: the
     attribute's; none where the walk starts from rest, the feet side by side), at the next heel
     strike the one eq. 3 split the step by (the plan's ``hip_shift``: none at a closing step's
-    end). Where the attribute changes from one step to the next, the pelvis turns continuously."""
+    end). Where the attribute changes from one step to the next, the pelvis turns continuously. A
+    walk's closing step does not list: its swing side's hip stays level while the body stops and the
+    leg comes down beside the stance leg (with the list it hung 3-7 mm lower there)."""
     if rotation_start is None:
         rotation_start = 0.0 if starts_at_rest else attrs.rad("pelvic_rotation")
     return PelvisSchedule(width=body.l0, rotation_start=rotation_start,
                           rotation_end=math.asin(plan.constraints.hip_shift / body.l0),
-                          list_peak=attrs.rad("pelvic_list"), t_step=plan.timings.t_step)
+                          list_peak=0.0 if plan.constraints.step_length == 0 else attrs.rad("pelvic_list"),
+                          t_step=plan.timings.t_step)
 
 
 def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,

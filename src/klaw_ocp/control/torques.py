@@ -77,7 +77,7 @@ def piecewise_linear(s, knots):
     return sum(knot * ca.fmax(0, 1 - ca.fabs(s - i)) for i, knot in enumerate(knots))
 
 
-def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=0.5, power=1.0):
+def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=0.5, power=1.0, settle=1.0):
     """The vertical sinusoid of the hip over one step (§4.2, after Inman) and its rate.
 
     Lowest at both heel strikes: ``y_start`` blends into ``y_end`` (the two heel-strike heights
@@ -85,7 +85,10 @@ def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=
     ``rise`` of the step and falls over its last ``fall`` (fractions of ``duration``), each a half
     raised cosine, and holds its height between them; the fall's raised cosine runs in
     1 - (1 - r)^power of the fraction r of the fall still ahead, so that a power above 1 starts
-    the fall gently and ends it steeply. With ``rise = fall = 1/2`` and ``power`` 1 (the paper's
+    the fall gently and ends it steeply. The blend from ``y_start`` to ``y_end`` is complete at
+    ``settle`` of the step (1: at its end, the paper's) and holds ``y_end`` after: a walk's closing
+    step rises to standing height by t2 (``control.step``), so that its swing leg, coming down
+    straight beside the stance leg, finds the hip high enough for a foot (issue #36 item 6). With ``rise = fall = 1/2`` and ``power`` 1 (the paper's
     reading) it is the raised cosine 0.5 (1 - cos 2 pi t / duration) that peaks at mid-step. Both end
     slopes are zero, so the hip's vertical velocity is continuous across the heel-strike map.
 
@@ -97,7 +100,8 @@ def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=
     # numpy arrays (the table's rows) are evaluated with numpy: the same operations in the same
     # order, 40x faster than CasADi's DM one element-wise operation at a time
     m = np if isinstance(t, np.ndarray) else ca
-    s = m.pi * t / duration
+    settled = settle * duration         # (the duration itself, to the bit, at settle 1)
+    s = m.pi * m.fmin(t, settled) / settled
     blend = 0.5 * (1 - m.cos(s))
     up = m.pi * m.fmin(t / (rise * duration), 1)
     ahead = m.fmin((duration - t) / (fall * duration), 1)      # 1 where the fall begins, 0 at the end
@@ -108,7 +112,7 @@ def hip_height_reference(t, duration, y_start, y_end, excursion, rise=0.5, fall=
     bump_up, bump_down = 0.5 * (1 - m.cos(up)), 0.5 * (1 - m.cos(down))
     y = y_start + (y_end - y_start) * blend + excursion * bump_up * bump_down
     down_rate = power * since ** (power - 1) / fall     # d(down / pi)/d(t / duration), while falling
-    yd = ((y_end - y_start) * 0.5 * m.sin(s) * m.pi / duration
+    yd = ((y_end - y_start) * 0.5 * m.sin(s) * m.pi / settled
           + excursion * 0.5 * m.pi / duration * (m.sin(up) / rise * bump_down - bump_up * m.sin(down) * down_rate))
     return y, yd
 

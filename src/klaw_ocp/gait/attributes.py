@@ -201,7 +201,8 @@ _SPECS = [
     _spec("determinants", "pelvic_list", "deg", 5.0, 0.0, 20.0,
           "§4.2, fig. 9: pelvic list (coronal plane) about the stance hip, the swing side down, "
           "largest at mid-step, 0 at heel strike; it lowers the swing leg's hip (people: about 4-5 "
-          "deg, Kadaba et al. 1990's obliquity, Perry & Burnfield); value " + _OURS),
+          "deg, Kadaba et al. 1990's obliquity, Perry & Burnfield); none in a walk's closing step, "
+          "which stops level; value " + _OURS),
     _spec("determinants", "pelvic_lateral_shift", "m", 0.02, 0.0, 0.1,
           "§4.2: lateral displacement, 'a maximum shortly after toe-off'; value " + _OURS),
     _spec("determinants", "foot_lateral_distance", "m", 0.08, 0.0, 0.4,
