@@ -253,8 +253,7 @@ def step_summary(spec, step, step_offsets: list | None = None, swing_foot: dict 
     stance = [sub.name for sub in step.subphases].index("stance")
     entry = step.plan.as_dict()
     # the attributes a step may have of its own (a schedule's), as it walked with them
-    attrs = step.plan.attributes if step.plan.attributes is not None else spec.attributes
-    entry["attributes"] = {name: attrs.get(name) for name in STEP_ATTRIBUTES}
+    entry["attributes"] = {name: step.plan.attributes.get(name) for name in STEP_ATTRIBUTES}
     # the thigh's peak ahead of its heel-strike angle: the attribute, or more where the swing leg
     # needed it to clear the ground (control/swing_clearance.py)
     entry["thigh_retraction_deg"] = float(step.thigh_retraction_deg)

@@ -104,7 +104,7 @@ def with_next_plan(controller: StepController, spec, result: StepResult, next_pl
     double support, whose length the plan fixes) and the heel-strike map's next input
     (:func:`_next_input`, the next stance's hip sinusoid). This makes the first again."""
     standing = result.index == 0 and spec.start_from_rest      # as _first_input starts it
-    foot = stance_leg_rules(controller.body, controller.step_attributes(result.plan), result.plan, result.subphase("stance"),
+    foot = stance_leg_rules(controller.body, result.plan.attributes, result.plan, result.subphase("stance"),
                             result.stance_hips, result.origin_x, standing,
                             next_plan.timings.t_ds if next_plan is not None else None)
     return replace(result, stance_foot=foot)
@@ -125,6 +125,5 @@ def _next_input(spec, plan, result: StepResult, next_plan) -> StepInput | None:
     excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
     # the next pelvis turns on from the rotation this one ended with, the one eq. 3 split this
     # step by (con.hip_shift = l0 sin of it; kinematics/pelvis.py)
-    ended_with = (plan.attributes if plan.attributes is not None else spec.attributes).rad("pelvic_rotation")
     return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion, hind_foot=result.stance_foot,
-                     pelvis_rotation=ended_with)
+                     pelvis_rotation=plan.attributes.rad("pelvic_rotation"))

@@ -109,7 +109,7 @@ def step_windows(walk) -> list:
     """Each step as the upper body and the lateral displacement see it (:class:`.upper_body.StepWindow`)."""
     return [StepWindow(s.t_start, s.plan.timings.t_step, s.plan.timings.t_ds, stance_leg(s.index),
                        moving=s.plan.constraints.step_length != 0,
-                       lateral_shift=None if s.plan.attributes is None else s.plan.attributes.pelvic_lateral_shift)
+                       lateral_shift=s.plan.attributes.pelvic_lateral_shift)
             for s in walk.steps]
 
 
@@ -117,12 +117,9 @@ def arm_swing_at(walk, samples: Samples) -> np.ndarray | None:
     """The arm swing amplitude (rad) at the frames, where the walk's steps have amplitudes of their
     own (a schedule's), each reached at its step's heel strike (:func:`.upper_body.step_amplitudes`);
     None where every step has the walk's."""
-    own = [s.plan.attributes.rad("arm_swing_amplitude") for s in walk.steps if s.plan.attributes is not None]
-    walk_value = walk.spec.attributes.rad("arm_swing_amplitude")
-    if all(v == walk_value for v in own):
+    values = [s.plan.attributes.rad("arm_swing_amplitude") for s in walk.steps]
+    if all(v == walk.spec.attributes.rad("arm_swing_amplitude") for v in values):
         return None
-    values = [walk_value if s.plan.attributes is None else s.plan.attributes.rad("arm_swing_amplitude")
-              for s in walk.steps]
     return step_amplitudes(values, samples.step, samples.tau, [s.plan.timings.t_step for s in walk.steps])
 
 

@@ -119,7 +119,7 @@ class StepInput:
     #: walk's last step (its own double support stands in)
     next_t_ds: float | None = None
     #: the pelvis's rotation at this heel strike (rad): the one the step before ended with (its
-    #: plan's ``hip_shift``); None: this step's own attribute (0 where it starts standing)
+    #: plan's ``pelvic_rotation``, which eq. 3 split it by); None: this step's own (0 standing)
     pelvis_rotation: float | None = None
 
 
@@ -220,10 +220,6 @@ class StepController:
                        "swing2": np.array([knee, SWING2_RECOVERY_SCALE, knee]),
                        "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
-    def step_attributes(self, plan):
-        """The attributes of the step ``plan`` plans (a schedule's per step), else the walk's."""
-        return self.attrs if plan.attributes is None else plan.attributes
-
     # -- contexts ------------------------------------------------------------------------------
     def stance_context(self, plan, inp: StepInput) -> dict:
         b, g, t = self.body, self.gains, plan.timings
@@ -293,7 +289,7 @@ class StepController:
         pelvis (its other hip, from which the hind leg and the swing hang), the hind leg's double
         support to toe-off, curve P and the swing foot, the swing context, the
         three swings (solved), the heel's clearance before it strikes."""
-        b, t, a = self.body, plan.timings, self.step_attributes(plan)
+        b, t, a = self.body, plan.timings, plan.attributes       # (a schedule's per step)
         stance = self.solve_stance(plan, inp, index, at_rest)
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
@@ -339,7 +335,7 @@ class StepController:
         stance's lock events, None in the closing step (whose stance has none)."""
         t = plan.timings
         t1, t2 = t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
-        specs, a = self.swing_specs, self.step_attributes(plan)
+        specs, a = self.swing_specs, plan.attributes
         # The swing re-simulates the stance (swing_law.py), so with plain shooting's lock events it
         # must start in the stance's lock state at toe-off: locked after an early 'leg_too_long'
         # not yet undone by 'leg_vertical'; in the closing step, whose stance has no lock events,

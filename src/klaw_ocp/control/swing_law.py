@@ -155,36 +155,28 @@ def swing1_forces(x, t, u, c):
 RETRACTION_START_SHARE = 0.35
 
 
-def thigh_reference(t, c):
-    """The swing hold's target and its rate at ``t``: the thigh's peak (``theta3_peak``, at t1)
+def thigh_reference(t, c, shift=0):
+    """The swing hold's target and its rate at ``t``: the thigh's peak (``theta3_peak``, at t1),
+    moved by ``shift`` (the recovery actuator, §4.3: forward where the toe would touch the ground),
     over RETRACTION_START_SHARE of the time from t1 to heel strike, then to the heel-strike angle
     (``theta3_target``) on S(s) = 3s² − 2s³, at rest at heel strike (§4.3: the hip angle "reaches
-    a maximum" at t1; people's thighs retract in terminal swing). Where the peak is the
-    heel-strike angle it is that angle throughout, the paper's hold."""
-    n = names(c)
-    shape, rate = _retraction(t, c)
-    return n.theta3_peak + (n.theta3_target - n.theta3_peak) * shape, (n.theta3_target - n.theta3_peak) * rate
-
-
-def _retraction(t, c):
-    """S(s) = 3s² − 2s³ over the retraction window (RETRACTION_START_SHARE of t1 -> heel strike,
-    to heel strike), 0 before it, and its time derivative."""
+    a maximum" at t1; people's thighs retract in terminal swing). The shift fades out with the
+    retraction: held to t2 and dropped there, it was retracted by swing3's constant moment alone
+    (a closing step's 4.2 N m/kg at 5 km/h). Where the peak is the heel-strike angle and nothing
+    shifts it, the target is that angle throughout, the paper's hold."""
     n = names(c)
     t_r = n.swing2_start + RETRACTION_START_SHARE * (n.swing_end_time - n.swing2_start)
     span = n.swing_end_time - t_r
     s = ca.fmin(ca.fmax((t - t_r) / span, 0), 1)
-    return s * s * (3 - 2 * s), 6 * s * (1 - s) / span
+    start = n.theta3_peak + shift
+    return start + (n.theta3_target - start) * s * s * (3 - 2 * s), (n.theta3_target - start) * 6 * s * (1 - s) / span
 
 
-def _hold(th3, th3d, t, c, actuator):
-    """The swing hold about :func:`thigh_reference`, its target shifted by the recovery
-    actuator (§4.3: moved forward where the toe would touch the ground) until the retraction
-    window, then the shift fading out with the retraction: a shift held to t2 and dropped there
-    was retracted by swing3's constant moment alone (a closing step's 4.2 N m/kg at 5 km/h)."""
+def _hold(th3, th3d, t, c, shift):
+    """The swing hold, a spring-damper about :func:`thigh_reference` (its damper on the rate
+    against the target's)."""
     n = names(c)
-    ref, rate = thigh_reference(t, c)
-    shape, shape_rate = _retraction(t, c)
-    target, target_rate = ref + actuator * (1 - shape), rate - actuator * shape_rate
+    target, target_rate = thigh_reference(t, c, shift)
     return spring_damper(th3, th3d - target_rate, n.k_h, n.d_h, target)
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..body import Body
 from ..errors import ConfigError, finite_real, out_of_range
@@ -65,8 +65,8 @@ class StepPlan:
     constraints: StepConstraints
     t_start: float = 0.0
     #: the step's locomotion attributes: the walk's, with a schedule's values of the
-    #: :data:`~klaw_ocp.gait.attributes.STEP_ATTRIBUTES` at this step (None: the walk's)
-    attributes: LocomotionAttributes | None = None
+    #: :data:`~klaw_ocp.gait.attributes.STEP_ATTRIBUTES` at this step
+    attributes: LocomotionAttributes = field(default_factory=LocomotionAttributes.defaults)
 
     def as_dict(self) -> dict:
         """A flat, JSON-ready dict; keys carry their unit (``_s``, ``_m``, ``_rad``, ...)."""
@@ -344,9 +344,9 @@ def landing_hip_shift(body: Body, attrs) -> float:
 def closing_step(body: Body, attributes, last: StepPlan) -> StepPlan:
     """The step that ends a walk at rest (section 5, fig. 8): the swing foot lands beside the
     stance foot (eq. 3 with sl = 0, so theta1 = 0 and w = l1 at the end) at the last step's
-    frequency, timings and attributes (the walk's ``attributes`` where ``last`` has none); it
-    starts where ``last`` ends."""
-    attributes = resolve(last.attributes if last.attributes is not None else attributes)
+    frequency, timings and attributes; it starts where ``last`` ends. (``attributes``, the walk's,
+    is kept in the signature for callers that plan a walk's steps and its close alike.)"""
+    attributes = last.attributes
     params = LocomotionParameters(0.0, 0.0, last.parameters.step_frequency_spm)
     con = step_constraints(body, 0.0, attributes, ankle_x=last.constraints.next_ankle_x, closing=True)
     return StepPlan(last.index + 1, params, last.timings, con, last.t_start + last.timings.t_step, attributes)

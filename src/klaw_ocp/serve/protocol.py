@@ -152,7 +152,7 @@ def step_message(ready, body, attrs, planned) -> dict:
         "speed": plan.parameters.speed_kmh, "step_length": plan.parameters.step_length_m,
         "step_frequency": plan.parameters.step_frequency_spm,
         # the attributes that may change per step, as this step walks with them
-        "attributes": {name: (plan.attributes or attrs).get(name) for name in STEP_ATTRIBUTES},
+        "attributes": {name: plan.attributes.get(name) for name in STEP_ATTRIBUTES},
         "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
         "frames": {"t": _finite(frames.t, 6), "points": np.rint(points * 1000).astype(np.int64).reshape(len(frames.t), -1).tolist()},
         "dynamics": {**{c: _finite(table[c], 4) for c in STRIP_COLUMNS},
