@@ -44,6 +44,7 @@ from scipy.integrate import solve_ivp
 import klaw_ocp.walk as walk_module
 from klaw_ocp.config import load_config
 from klaw_ocp.control.parameter_units import parameter_unit
+from klaw_ocp.control.swing_law import RETRACTION_START_SHARE
 from klaw_ocp.dynamics import hip_kinematics, stance_accelerations, swing_accelerations
 from klaw_ocp.walk import simulate_walk
 
@@ -227,9 +228,18 @@ def swing_rates(name, t, x, u, n, before_off):
     pos, hip_vel, hip_acc = hip_kinematics(BODY, x[0:3], x[3:6], qdd)
     offset, offset_vel, offset_acc = pelvis_offset(n, t)
     pos, hip_vel, hip_acc = pos + offset, hip_vel + offset_vel, hip_acc + offset_acc
-    # the spring-damper holds the thigh at its peak in swing2 (shifted by the recovery actuator)
-    # and draws it to its heel-strike angle in swing3
-    hold = lambda th3, th3d, target, shift=0.0: n["k_h"] * (target + shift - th3) - n["d_h"] * th3d
+    # the spring-damper holds the thigh at its peak in swing2 (shifted by the recovery actuator),
+    # from RETRACTION_START_SHARE of t1 -> heel strike draws the target to the heel-strike angle on
+    # 3s^2 - 2s^3 (the peak is that angle unless the step retracts), its damper on the rate
+    # against the target's, and goes on into swing3 (with swing2's shift, hold_offset)
+    def hold(th3, th3d, shift):
+        t_r = n["swing2_start"] + RETRACTION_START_SHARE * (n["swing_end_time"] - n["swing2_start"])
+        span = n["swing_end_time"] - t_r
+        r = min(max((t - t_r) / span, 0.0), 1.0)
+        start = n["theta3_peak"] + shift
+        target = start + (n["theta3_target"] - start) * r * r * (3 - 2 * r)
+        target_rate = (n["theta3_target"] - start) * 6 * r * (1 - r) / span
+        return n["k_h"] * (target - th3) - n["d_h"] * (th3d - target_rate)
     if name == "swing1":   # knee locked for the dynamics; theta4 keeps the ankle on curve P
         th3, th4, th3d = x[6:9]
         f3 = about_mean(t, n["toe_off_time"], n["swing2_start"], n["tau3"], u["F_theta3_fall"], u["F_theta3_mean"])
@@ -246,11 +256,11 @@ def swing_rates(name, t, x, u, n, before_off):
     if name == "swing2":
         th3, th4, th3d, th4d = x[6:10]
         f4 = about_mean(t, n["swing2_start"], n["foot_t2"], n["tau4"], u["F_theta4_fall"], u["F_theta4_mean"])
-        qdd = swing_accelerations(BODY, [th3, th4], [th3d, th4d], [hold(th3, th3d, n["theta3_peak"], u["hip_actuator"]), f4],
+        qdd = swing_accelerations(BODY, [th3, th4], [th3d, th4d], [hold(th3, th3d, u["hip_actuator"]), f4],
                                   hip_acc, False)
         return np.concatenate([rates, [th3d, th4d], qdd])
     th3, th3d = x[6:8]   # swing3: knee locked straight, the holding spring plus a constant moment
-    f3 = hold(th3, th3d, n["theta3_target"]) + u["F_theta3_moment"]
+    f3 = hold(th3, th3d, n["hold_offset"]) + u["F_theta3_moment"]
     return np.concatenate([rates, [th3d, swing_accelerations(BODY, [th3, 0.0], [th3d, 0.0], [f3, 0.0],
                                                              hip_acc, True)[0]]])
 

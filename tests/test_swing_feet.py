@@ -114,24 +114,29 @@ def test_the_swing_ankle_leaves_toe_off_at_the_stance_rate_and_is_neutral_from_m
 
 def test_the_body_s_swing_ankle_relaxes_with_the_knee():
     """The foot the body shows (kinematics/swing_foot.py): the same swing1, then through swing2 it
-    keeps θ5_t1's dorsiflexion in proportion to the knee's flexion (all of it while the knee is as
-    flexed as at t1, or more), reaching the heel-strike angle as the knee reaches full extension at
-    t2, at rest, and holding it through swing3."""
-    from klaw_ocp.kinematics.swing_foot import SwingFoot
+    keeps θ5_t1's dorsiflexion by S(u), u the knee's flexion over its t1 flexion (1 where it
+    flexes on past it) for KNEE_SHARE_OF_RELAXATION and the time left to t2 for the rest,
+    reaching the heel-strike angle as the knee reaches full extension at t2, at rest, and holding
+    it through swing3."""
+    from klaw_ocp.kinematics.swing_foot import KNEE_SHARE_OF_RELAXATION as k, SwingFoot
     knee_t1 = 0.9
     foot = SwingFoot(0.1, 0.3, 0.45, 0.55, 1.40, 0.5, 1.80, 1.5708, 0.0, -5.0, knee_t1)
     # a knee that flexes on a little after t1, then extends to 0 at t2 at rest (as swing2's does)
     s = lambda t: np.clip((t - 0.3) / 0.15, 0.0, 1.0)
     knee = lambda t: knee_t1 * (1 + 0.3 * np.sin(np.pi * s(t))) * (1 - s(t)) ** 2 * (1 + 2 * s(t))
     th5 = lambda t: float(foot.angles(np.array([t]), knee(np.array([t])))[0][0])
+    relaxed = lambda u: 1.5708 + (1.80 - 1.5708) * u * u * (3 - 2 * u)
     h = 1e-5
     rate = lambda t: (th5(t + h) - th5(t - h)) / (2 * h)
+    assert 0.5 <= k <= 1.0
     for t in np.linspace(0.1, 0.3, 9):           # swing1: the constrained foot's
         assert th5(t) == pytest.approx(float(foot.angles(np.array([t]))[0][0]), abs=1e-15)
-    assert th5(0.33) == pytest.approx(1.80)       # the knee flexing on past its t1 angle: held
-    for t in (0.4, 0.43):                         # relaxing with the knee
+    # the knee flexing on past its t1 angle: its share held, the time's relaxing
+    assert th5(0.33) == pytest.approx(relaxed(k + (1 - k) * (1 - s(0.33))), abs=1e-12)
+    for t in (0.4, 0.43):                         # relaxing with the knee and the time
         r = knee(np.array([t]))[0] / knee_t1
-        assert th5(t) == pytest.approx(1.5708 + (1.80 - 1.5708) * r * r * (3 - 2 * r), abs=1e-12)
+        assert th5(t) == pytest.approx(relaxed(k * r + (1 - k) * (1 - s(t))), abs=1e-12)
+    assert rate(0.3 + 2 * h) == pytest.approx(0.0, abs=0.05)    # no rate jump at t1 (S'(1) = 0)
     assert th5(0.45 - 1e-9) == pytest.approx(1.5708, abs=1e-9) and abs(rate(0.45 - 2 * h)) < 1e-3
     assert th5(0.5) == pytest.approx(1.5708) and th5(0.55) == pytest.approx(1.5708)
 
