@@ -53,14 +53,20 @@ def toe_under_knee(body: Body, knee: np.ndarray, theta5: float, theta6: float) -
     l9 sin θ5 - l13 cos(θ5 + θ6) and B = r sin θ5 - l9 cos θ5 + l13 sin(θ5 + θ6), r the metatarsal
     head's reach ahead of the ankle: its root is φ = atan2(B, -A) (A < 0: the shank is the longest
     term). In closed form; it was a regula falsi to 1e-13 rad, thousands of evaluations a walk."""
-    kx, ky = float(knee[0]), float(knee[1])
+    ankle_x, ankle_y, phi = _toe_under_knee(body, float(knee[0]), float(knee[1]), theta5, theta6)
+    return np.array([ankle_x, ankle_y]), phi
+
+
+def _toe_under_knee(body: Body, kx: float, ky: float, theta5: float, theta6: float) -> tuple[float, float, float]:
+    """:func:`toe_under_knee` on floats: the ankle's x and y and the shank angle (the swing1 end
+    posture's search asks for it a dozen times a step, where making arrays was half its time)."""
     l4, l9, l13 = body.l4, body.l9, body.l13
     reach = body.metatarsal_reach
     c5, s5 = math.cos(theta5), math.sin(theta5)
     a = -l4 - reach * c5 - l9 * s5 - l13 * math.cos(theta5 + theta6)
     b = reach * s5 - l9 * c5 + l13 * math.sin(theta5 + theta6)
     phi = math.atan2(b, -a)
-    return np.array([kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi)]), phi
+    return kx - body.l4 * math.sin(phi), ky - body.l4 * math.cos(phi), phi
 
 
 def curve_p_coefficients(a0: float, a_max: float, a_min: float, c: float, d: float,
@@ -84,9 +90,11 @@ def swing1_end_posture(body: Body, knee: np.ndarray, theta5_natural: float, thet
     walker's does at mid-swing). With the thigh at its heel-strike angle and the toe under the knee
     (§4.3), the interpolated foot alone would often point its toe into the ground.
     """
+    kx, ky = float(knee[0]), float(knee[1])
+
     def toe_height(theta5):
-        ankle, phi = toe_under_knee(body, knee, theta5, theta6)
-        toe = foot_points_float(ankle[0], ankle[1], phi, theta5, theta6, body.l8, body.l9, body.l12, body.l13)[2]
+        ankle_x, ankle_y, phi = _toe_under_knee(body, kx, ky, theta5, theta6)
+        toe = foot_points_float(ankle_x, ankle_y, phi, theta5, theta6, body.l8, body.l9, body.l12, body.l13)[2]
         return toe[1] - clearance
 
     theta5 = theta5_natural

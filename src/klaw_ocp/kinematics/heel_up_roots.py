@@ -18,7 +18,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..body import Body
-from .leg_geometry import FlatFoot, clamp, foot_pieces, meta_off_band
+from .leg_geometry import FlatFoot, clamp, clamp_float, foot_pieces, meta_off_band
 
 #: The steepest foot the rules consider (rad): the foot stands almost on its toe.
 MAX_PITCH = math.radians(89)
@@ -30,6 +30,11 @@ _EDGE = 1e-15
 _BAND_STEPS = 30
 #: the band root's distance error (m) at which it stops: round-off of the ankle's distance
 _BAND_TOL = 1e-15
+#: Up to this many hips, :func:`reach_pitch` works on Python floats, hip by hip: the walk asks for
+#: one to a few dozen at a time, where numpy's fixed cost per call (1-3 us, some 60 calls) was all
+#: the time. The same operations in the same order on the same functions (math's sin and cos are
+#: numpy's; hypot, arctan2 and arccos stay numpy's), so the same numbers to the bit.
+_FEW = 32
 
 
 @dataclass(frozen=True)
@@ -135,6 +140,46 @@ def _band_root(foot: FlatFoot, q: float, band: float, hips: np.ndarray, radius: 
     return p
 
 
+def _band_root_few(foot: FlatFoot, q: float, band: float, hx: list, hy: list, radius: list,
+                   far: list, near: list) -> list:
+    """:func:`_band_root` on Python floats (lists of the few hips' x, y and the rest): every hip
+    steps until all have met, as the arrays do, so that each root is the one they give."""
+    body = foot.body
+    off_x, off_y, l13 = -body.metatarsal_reach, body.l9, body.l13
+    toe_x = foot.ankle_x + body.metatarsal_reach + body.l13
+    n, a0, b0, quarter, half = len(hx), q - band, q + band, 4 * band, 2 * band
+    a, b = [a0] * n, [b0] * n
+    p = [a0 + (b0 - a0) * fa / (fa - fb) for fa, fb in zip(far, near)]
+    for _ in range(_BAND_STEPS):
+        terms = []
+        for i in range(n):
+            lever = p[i] - q + band
+            rise = lever * lever / quarter
+            c, s, cb, sb = math.cos(p[i]), math.sin(p[i]), math.cos(rise), math.sin(rise)
+            ax = toe_x - l13 * cb + (c * off_x + s * off_y) - hx[i]
+            ay = l13 * sb + (-s * off_x + c * off_y) - hy[i]
+            dist = float(_hypot(ax, ay))
+            terms.append((lever, c, s, cb, sb, ax, ay, dist, dist - radius[i]))
+        if all(abs(term[-1]) <= _BAND_TOL for term in terms):
+            return p
+        new = []
+        for i, (lever, c, s, cb, sb, ax, ay, dist, g) in enumerate(terms):
+            rate = lever / half
+            dax = l13 * sb * rate + (-s * off_x + c * off_y)
+            day = l13 * cb * rate + (-c * off_x - s * off_y)
+            slope = (ax * dax + ay * day) / dist
+            if g > 0:
+                a[i] = p[i]
+            else:
+                b[i] = p[i]
+            step = p[i] - g / (slope if slope != 0 else -1.0)
+            new.append(step if a[i] <= step <= b[i] else 0.5 * (a[i] + b[i]))
+        if all(abs(x - y) <= 1e-14 for x, y in zip(new, p)):
+            return new
+        p = new
+    return p
+
+
 @lru_cache(maxsize=64)
 def _band_ends(body: Body, meta_off_theta6: float) -> np.ndarray:
     """The ankle (2, 2) at the meta-off band's two ends, its flat ankle at x = 0."""
@@ -150,6 +195,8 @@ def reach_pitch(foot: FlatFoot, meta_off_theta6: float, hips: np.ndarray, radius
     (MAX_PITCH if it never does)."""
     g = heel_up(foot.body, meta_off_theta6)
     radius = np.broadcast_to(np.asarray(radius, float), (len(hips),))
+    if len(hips) <= _FEW:
+        return _reach_pitch_few(foot, g, hips, radius)
     dx, dy = (g.pivot_x + foot.ankle_x) - hips[:, 0], g.pivot_y - hips[:, 1]
     pitch = _least(g, _on_circle(g, dx, dy, np.hypot(dx, dy), radius))
     reaches_flat = np.hypot(foot.ankle[0] - hips[:, 0], foot.ankle[1] - hips[:, 1]) <= radius
@@ -166,3 +213,66 @@ def reach_pitch(foot: FlatFoot, meta_off_theta6: float, hips: np.ndarray, radius
             if inside.size:
                 pitch[inside] = _band_root(foot, g.q, g.band, hips[inside], radius[inside], far[bracket], near[bracket])
     return np.where(reaches_flat, 0.0, np.minimum(pitch, MAX_PITCH))
+
+
+#: numpy's hypot (libm's) on two numbers: math.hypot rounds differently in the last bit
+_hypot = np.hypot
+
+
+@lru_cache(maxsize=64)
+def _pieces(body: Body, meta_off_theta6: float) -> tuple:
+    """Per piece of :func:`heel_up`: r, r², 2 r, φ, p0 and its pitch range (lo, lo - edge, hi + edge), as
+    floats for :func:`_reach_pitch_few` (computed as numpy computes them on the columns)."""
+    g = heel_up(body, meta_off_theta6)
+    columns = (g.ankle_r, g.ankle_phi, g.p0, g.lo, g.hi)
+    return tuple((r, r * r, 2 * r, phi, p0, lo, lo - _EDGE, hi + _EDGE)
+                 for r, phi, p0, lo, hi in zip(*(column[:, 0].tolist() for column in columns)))
+
+
+def _reach_pitch_few(foot: FlatFoot, g: HeelUp, hips: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """:func:`reach_pitch` hip by hip on Python floats (see _FEW): :func:`_on_circle`'s two
+    intersections about each pivot, :func:`_least`'s choice, the band's root where it lies there."""
+    hx, hy = hips[:, 0], hips[:, 1]
+    # the two pivots less the hips, and the flat ankle's: one hypot
+    ankle_x, ankle_y = foot.ankle.tolist()
+    dx = np.array([*(g.pivot_x[:, 0] + foot.ankle_x).tolist(), ankle_x])[:, None] - hx
+    dy = np.array([*g.pivot_y[:, 0].tolist(), ankle_y])[:, None] - hy
+    *dists, flat = np.hypot(dx, dy).tolist()
+    headings = np.arctan2(dy[:2], dx[:2]).tolist()
+    radius, pieces, n = radius.tolist(), _pieces(foot.body, g.q), len(hips)
+    # |pivot + r e(psi) - hip| = radius  <=>  d . e(psi) = k, psi = phi - (p - p0), as _on_circle
+    ks = [[((big * big - d * d) - rr) / r2 for big, d in zip(radius, dists_i)]
+          for (_, rr, r2, *_), dists_i in zip(pieces, dists)]
+    spreads = np.arccos([[clamp_float(k / (d if d > 0 else 1.0), -1.0, 1.0) for k, d in zip(ks_i, dists_i)]
+                         for ks_i, dists_i in zip(ks, dists)]).tolist()
+    pitch, pi, turn = [math.inf] * n, math.pi, 2 * math.pi
+    for (_, _, _, phi, p0, lo, lo_edge, hi_edge), dists_i, ks_i, headings_i, spreads_i in zip(
+            pieces, dists, ks, headings, spreads):
+        for j, (d, k, heading, spread) in enumerate(zip(dists_i, ks_i, headings_i, spreads_i)):
+            if not (d > 0 and abs(k) <= d):
+                continue                   # the circles do not meet: NaN, never inside
+            for psi in (heading + spread, heading + -spread):
+                candidate = p0 + ((phi - psi + pi) % turn - pi)
+                if lo_edge <= candidate <= hi_edge:
+                    candidate = candidate if candidate >= lo else lo
+                    if candidate < pitch[j]:
+                        pitch[j] = candidate
+    reaches_flat = [f <= big for f, big in zip(flat, radius)]
+    if g.band > 0:
+        # no root about the metatarsal head: where the band's ends bracket the reach, the root is in it
+        start, rows = g.q - g.band + _EDGE, []
+        ends = _band_ends(foot.body, g.q)
+        (far_x, far_y), (near_x, near_y) = ends.tolist()
+        for j in range(n):
+            if pitch[j] > start and not reaches_flat[j]:
+                x, y = float(hx[j]), float(hy[j])
+                far = _hypot(far_x + foot.ankle_x - x, far_y - y) - radius[j]
+                near = _hypot(near_x + foot.ankle_x - x, near_y - y) - radius[j]
+                if far > 0 and near <= 0:
+                    rows.append((j, x, y, radius[j], far, near))
+        if rows:
+            roots = _band_root_few(foot, g.q, g.band, *map(list, zip(*(row[1:] for row in rows))))
+            for (j, *_), root in zip(rows, roots):
+                pitch[j] = root
+    return np.array([0.0 if flat_j else (p if p <= MAX_PITCH or p != p else MAX_PITCH)
+                     for flat_j, p in zip(reaches_flat, pitch)])

@@ -66,6 +66,20 @@ def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, 
     return theta3, theta4, knee
 
 
+def leg_ik_float(body: Body, hip_x: float, hip_y: float, ankle_x: float, ankle_y: float) -> tuple[float, float]:
+    """θ3 and θ4 of :func:`leg_ik` for one hip and ankle, on Python floats (the walk's one-sample
+    calls): the same operations in the same order, the three arctangents in one array as there."""
+    l3, l4 = body.l3, body.l4
+    dx, dy = ankle_x - hip_x, ankle_y - hip_y
+    d = float(np.hypot(dx, dy))
+    d = d if d <= l3 + l4 or d != d else l3 + l4
+    s, short = (l3 + l4 + d) / 2, (l3 + l4 - d) / 2
+    root = lambda v: math.sqrt(v if v >= 0.0 or v != v else 0.0)
+    beta, delta, theta4 = np.arctan2([-dx, root((s - l3) * short), root(s * short)],
+                                     [-dy, root(s * (s - l4)), root((s - l3) * (s - l4))]).tolist()
+    return beta - 2 * delta, 2 * theta4
+
+
 def knee_flexion_for_reach(body: Body, d) -> np.ndarray:
     """Knee flexion (rad, 0 straight) of the two-segment leg whose hip and ankle are ``d`` (m,
     clipped to l1) apart: :func:`leg_ik`'s half-angle form, well conditioned at the straight knee."""
@@ -191,6 +205,25 @@ class FootPieces:
         out[..., 1] = pivot_y[:, None] + (-s * v[..., 0] + c * v[..., 1])
         return out
 
+    def ankle_float(self, ankle_x: float, p: float) -> tuple[float, float]:
+        """The ankle of :meth:`turned` at one pitch ``p``, on Python floats (math's sin and cos
+        are numpy's)."""
+        if p < 0:
+            pivot_x, pivot_y, (vx, vy) = self.heel[0] + ankle_x, self.heel[1], self.heel_offsets[1].tolist()
+        else:
+            w = meta_off_band(self.q)
+            flat = p if p >= 0.0 or p != p else 0.0
+            if w <= 0:
+                theta6 = flat if flat <= self.q or flat != flat else self.q
+            else:
+                v = flat - self.q
+                theta6 = flat if v <= -w else (self.q if v >= w else flat - (v + w) * (v + w) / (4 * w))
+            beta = p - theta6
+            pivot_x, pivot_y = self.toe[0] - self.l13 * math.cos(beta) + ankle_x, self.l13 * math.sin(beta)
+            vx, vy = self.meta_offsets[1].tolist()
+        c, s = math.cos(p), math.sin(p)
+        return float(pivot_x + (c * vx + s * vy)), float(pivot_y + (-s * vx + c * vy))
+
 
 @lru_cache(maxsize=64)
 def foot_pieces(body: Body, meta_off_theta6: float) -> FootPieces:
@@ -214,6 +247,13 @@ def clamp(x, lo, hi):
     passes through Python wrappers, ~3 us on a few samples, and the virtual leg and the swing
     foot clamp hundreds of times a walk."""
     return np.minimum(np.maximum(x, lo), hi)
+
+
+def clamp_float(x: float, lo: float, hi: float) -> float:
+    """:func:`clamp` of one number, for the rules' one-sample paths: numpy's maximum and minimum to
+    the bit (a NaN stays NaN, ties keep ``x``)."""
+    x = x if x >= lo or x != x else lo
+    return x if x <= hi or x != x else hi
 
 
 def smoothstep(u):

@@ -80,11 +80,12 @@ class PelvisSchedule:
     def swing_side_hips(self, t, hips, hip_vels=None):
         """The pelvis's other hip (n, 2) at step times ``t`` from the stance hips ``hips`` (n, 2)
         there; with the stance hips' velocities ``hip_vels``, (hips, velocities)."""
-        (dx, dy), (vx, vy), _ = self.swing_hip_offset(np.asarray(t, float))
+        (dx, dy), rates = _offset_and_rate(self.width, self.rotation_start, self.rotation_end, self.list_peak,
+                                           self.t_step, np.asarray(t, float), hip_vels is not None)
         other = np.asarray(hips, float) + np.column_stack([dx, dy])
         if hip_vels is None:
             return other
-        return other, np.asarray(hip_vels, float) + np.column_stack([vx, vy])
+        return other, np.asarray(hip_vels, float) + np.column_stack(rates)
 
 
 def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops):
@@ -100,6 +101,25 @@ def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops):
                list_peak * k * ops.sin(2 * a),
                2 * list_peak * k * k * ops.cos(2 * a))
     return rotation, lowered
+
+
+def _offset_and_rate(width, rotation_start, rotation_end, list_peak, t_step, t, rate: bool):
+    """:func:`swing_hip_offset`'s (Δx, Δy) and, with ``rate``, (Δx', Δy') (else None), by the same
+    expressions (each sine and cosine once): the hips ask for no acceleration, whose terms were
+    most of the numpy calls of a step's two evaluations."""
+    k = math.pi / t_step
+    a = k * t
+    span = rotation_start + rotation_end
+    cos_a, sin_a = np.cos(a), np.sin(a)
+    r = span * (1 + cos_a) / 2 - rotation_end
+    q = list_peak * sin_a ** 2
+    sr, cr, sq = np.sin(r), np.cos(r), np.sin(q)
+    offset = (-width * sr, -width * cr * sq)
+    if not rate:
+        return offset, None
+    r1 = -span * k * sin_a / 2
+    q1 = list_peak * k * np.sin(2 * a)
+    return offset, (-width * cr * r1, width * (sr * r1 * sq - cr * np.cos(q) * q1))
 
 
 def pelvis_angles(rotation_start, rotation_end, list_peak, t_step, t, ops=np):

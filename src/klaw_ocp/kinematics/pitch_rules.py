@@ -31,9 +31,11 @@ the heel; times are the leg's stance time, 0 at its heel strike.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .leg_geometry import clamp, smoothstep
+from .leg_geometry import clamp, clamp_float, smoothstep
 
 #: The least reach of the leg, as a fraction of l1 (about 10° of knee at 1.8 m): the toe-off pitch
 #: is at least the one at which the leg reaches its ankle with it (:func:`.virtual_leg.toe_off_pitch`),
@@ -122,6 +124,9 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, deficit) 
     to the rule at those rows to keep the heel from coming down again (None before the heel-off
     search has set it). Returns the pitch and the hip-ankle distance the leg keeps, a fraction of
     l1 (1 where no reach rule applies)."""
+    if len(t) <= _FEW and not any(isinstance(value, np.ndarray) and value.ndim for value in rules.values()):
+        return _one_stance_few(rules, t, hips, geometry, deficit)
+
     def at(name, rows):
         value = rules[name]
         return value[rows] if isinstance(value, np.ndarray) and value.ndim else value
@@ -170,3 +175,85 @@ def rule_pitch(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, deficit) 
         p[double] = np.maximum(p[double], floor[double] if np.ndim(floor) else floor)
     pitch[up] = p
     return pitch, fraction
+
+
+#: Up to this many samples of one stance (its rules numbers), :func:`rule_pitch` works on Python
+#: floats, sample by sample: the walk's step asks for 1 to 21 at a time, where numpy's fixed cost
+#: per call was all the time. The same operations in the same order (math's sqrt and cos are
+#: numpy's; hypot stays numpy's), so the same numbers to the bit.
+_FEW = 32
+
+
+def _smoothstep_float(u: float) -> float:
+    u = clamp_float(u, 0.0, 1.0)
+    return u * u * (3 - 2 * u)
+
+
+def _ramp_float(t: float, t_flat: float, t_knee: float) -> float:
+    """:func:`_floor_ramp` of one sample of one stance."""
+    span = t_knee - t_flat
+    return _smoothstep_float((t - t_flat) / span) if span > 0 else 1.0
+
+
+def _soft_plus_float(v: float, width: float) -> float:
+    """:func:`_soft_plus` of one number, ``width`` a number."""
+    if width <= 0:
+        return v if v >= 0.0 or v != v else 0.0
+    return 0.0 if v <= -width else (v if v >= width else (v + width) * (v + width) / (4 * width))
+
+
+def _knee_float(t: float, r: dict) -> float:
+    """:func:`knee_schedule` of one sample of one stance's rules ``r``."""
+    ramp = _ramp_float(t, r["t_flat"], r["t_knee"])
+    span = r["t_knee_end"] - r["t_knee"]
+    s = clamp_float((t - r["t_knee"]) / (span if span > 0 else 1.0), 0.0, 1.0)
+    knee = r["knee_floor"] * ramp + (r["knee_toe_off"] - r["knee_floor"]) * s * s
+    if t >= r["t_hold"] and r["knee_hold"] > 0:
+        knee = r["knee_hold"] + _soft_plus_float(knee - r["knee_hold"], KNEE_HOLD_BLEND)
+    return knee
+
+
+def _one_stance_few(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, deficit):
+    """:func:`rule_pitch` of one stance's rules at a few samples (see _FEW); the rocker, the
+    reach pitches and the deficit are asked for as the arrays ask for them (the same samples
+    together: the reach's band root steps them together)."""
+    body, (ankle_x, ankle_y), n = geometry.foot.body, geometry.foot.ankle.tolist(), len(t)
+    times, t_flat = t.tolist(), rules["t_flat"]
+    up = [j for j, tj in enumerate(times) if not tj < t_flat]
+    if len(up) < n:
+        rocker = [j for j, tj in enumerate(times) if tj < t_flat]
+        pitch = np.zeros(n)
+        pitch[rocker] = rocker_pitch(t[rocker], t_flat, rules["rocker_pitch"], rules["rocker_rate"])
+        if not up:
+            return pitch, np.ones(n)
+        pitch = pitch.tolist()
+    else:
+        pitch = [0.0] * n
+    flats = np.hypot(ankle_x - hips[:, 0], ankle_y - hips[:, 1]).tolist()
+    l3, l4, l1, width = body.l3, body.l4, body.l1, rules["heel_blend"]
+    # the schedule's reach, and 2 x width beyond it at foot flat (rule_pitch's comments)
+    t_quarter, lengths, lever = t_flat + 0.25 * (rules["t_knee"] - t_flat), l3 * l3 + l4 * l4, 2 * l3 * l4
+    fraction, off = [1.0] * n, []
+    for j in up:
+        tj, flat = times[j], flats[j]
+        reach = math.sqrt(lengths + lever * math.cos(_knee_float(tj, rules))) \
+            + 2 * width * (1 - _ramp_float(tj, t_flat, t_quarter))
+        keep = flat - _soft_plus_float(flat - reach, width)
+        fraction[j] = keep / l1
+        if keep < flat:
+            off.append(j)
+    p = dict.fromkeys(up, 0.0)
+    if off:
+        p.update(zip(off, geometry.reach_pitch(hips[off], np.array([fraction[j] for j in off])).tolist()))
+    t_step = rules["t_step"]
+    single = [j for j in up if times[j] < t_step]
+    if deficit is not None and single:
+        mask = np.zeros(n, bool)
+        mask[single] = True
+        added = np.broadcast_to(np.asarray(deficit(t, mask), float), (len(single),)).tolist()
+        p.update((j, p[j] + d) for j, d in zip(single, added))
+    floor = rules["pitch_ds_floor"]
+    for j in up:
+        value = p[j]
+        pitch[j] = value if not times[j] >= t_step or value >= floor or value != value else floor
+    return np.array(pitch), np.array(fraction)

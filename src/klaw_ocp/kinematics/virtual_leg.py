@@ -42,7 +42,8 @@ import numpy as np
 from ..body import Body
 from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
-from .leg_geometry import FlatFoot, ankle_angle, knee_flexion_for_reach, leg_ik, meta_off_band, reach_for_knee_flexion
+from .leg_geometry import (FlatFoot, ankle_angle, foot_pieces, knee_flexion_for_reach, leg_ik, leg_ik_float,
+                           meta_off_band, reach_for_knee_flexion)
 from .pitch_rules import HEEL_BLEND_REL, REACH_FRACTION, RULE_FIELDS, knee_schedule, rocker_left, rule_pitch
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
 _PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch in or past the meta-off band)
@@ -310,8 +311,10 @@ def toe_off_pitch(foot: StanceFoot, hip: np.ndarray, pitch_start: float, pitch_w
         reach = float(foot.reach_pitch(hips, REACH_FRACTION)[0])
     bound = theta3_target + MIN_SWING1_THIGH_TRAVEL
 
-    def thigh_ahead(pitch: float) -> float:
-        return float(leg_ik(foot.foot.body, hips, foot._ankle(np.array([pitch])))[0][0]) - bound
+    pieces, (hip_x, hip_y) = foot_pieces(foot.foot.body, foot.meta_off_theta6), hips[0].tolist()
+
+    def thigh_ahead(pitch: float) -> float:     # leg_ik's θ3 at the ankle of ``pitch``, on floats
+        return leg_ik_float(foot.foot.body, hip_x, hip_y, *pieces.ankle_float(foot.foot.ankle_x, pitch))[0] - bound
     wanted = max(pitch_wanted, pitch_start, reach)
     if thigh_ahead(wanted) >= 0:
         return wanted
