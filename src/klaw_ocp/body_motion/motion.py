@@ -25,10 +25,10 @@ import numpy as np
 from ..gait.plan import stance_leg
 from ..kinematics.leg_geometry import leg_ik
 from ..kinematics.pelvis import PelvisSchedule
-from .pose import LegPoints, UpperBody, hip_positions, skeleton_angles, upper_body_angles
+from .pose import LegPoints, UpperBody, hip_positions, pelvis_rotations, set_upper_body_angles, skeleton_angles
 from .skeleton import ANGLE_NAMES, SIDES
 from .stance_legs import stance_frames
-from .swing_legs import swing_legs
+from .swing_legs import swing_legs, swing_samples
 from .upper_body import StepWindow, lateral_displacement, step_amplitudes, upper_body_motion
 from .walk_samples import frame_times, locate_steps, stance_at, stance_curves
 
@@ -36,7 +36,6 @@ from .walk_samples import frame_times, locate_steps, stance_at, stance_curves
 ANGLES_COLUMNS = ("time", "root_x", "root_y", "root_z") + ANGLE_NAMES
 _POINTS = ("hip", "knee", "ankle", "heel", "metatarsal", "toe")
 _FOOT = ("ankle", "heel", "metatarsal", "toe")
-_OTHER = {"right": "left", "left": "right"}
 _HIP_FLEXION = {side: ANGLE_NAMES.index(f"{s}_hip_flexion") for s, side in SIDES}
 
 
@@ -97,12 +96,15 @@ class LegPlanes:
     def all_to_world(self, side: str, points: dict) -> dict:
         """:meth:`to_world` of several in-plane point arrays (n, 2) at every sample, in one pass
         (name -> world points (n, 3))."""
+        return dict(zip(points, self.stacked_to_world(side, np.stack(list(points.values())))))
+
+    def stacked_to_world(self, side: str, p: np.ndarray) -> np.ndarray:
+        """:meth:`to_world` of in-plane points stacked (k, n, 2) at every sample: (k, n, 3)."""
         hip, z_foot = self.hips[side], self.foot_z[side]
         dz = hip[:, 2] - z_foot
         v_leg = np.hypot(hip[:, 1], dz)
-        p = np.stack(list(points.values()))
         v = p[..., 1]
-        return dict(zip(points, np.stack([p[..., 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg], axis=-1)))
+        return np.stack([p[..., 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg], axis=-1)
 
 
 def step_windows(walk) -> list:
@@ -140,15 +142,16 @@ class WalkPieces:
                    np.array([s.t_start for s in walk.steps]))
 
 
-def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray,
-               pieces: WalkPieces | None = None) -> tuple[LegPlanes, np.ndarray, np.ndarray, np.ndarray]:
+def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray, pieces: WalkPieces | None = None,
+               rotation: np.ndarray | None = None) -> tuple[LegPlanes, np.ndarray, np.ndarray, np.ndarray]:
     """The pelvis and the legs' planes at the samples: (planes, pelvis centre (n, 3), lean θ2 (n,),
     the simulated hip (n, 2): x and height in the planar model).
 
     The simulated hip is the current step's stance hip, exact in its leg's plane: its in-plane
     height is the simulated height v, so its world height is sqrt(v² − dz²). The pelvis centre
     is then where the pelvis angles put it from that hip, at the lateral displacement's z; the
-    other hip is where the pelvis puts it (:func:`.pose.hip_positions`)."""
+    other hip is where the pelvis puts it (:func:`.pose.hip_positions`). ``rotation``: the pelvis's
+    rotations (:func:`.pose.pelvis_rotations`) when the caller has them."""
     body, attrs = walk.spec.body, walk.spec.attributes
     pieces = WalkPieces.of(walk) if pieces is None else pieces
     n = len(samples.t)
@@ -156,7 +159,7 @@ def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray,
     half = attrs.foot_lateral_distance / 2    # the distance between the feet's centrelines
     foot_z = {"right": half, "left": -half}
     stance_right = pieces.stance_right[samples.step]
-    offsets = hip_positions(body, np.zeros((n, 3)), pelvis_angles)     # each hip from the pelvis centre
+    offsets = hip_positions(body, np.zeros((n, 3)), pelvis_angles, rotation)     # each hip from the pelvis centre
     offset = np.where(stance_right[:, None], offsets["right"], offsets["left"])
     centre_z = lateral_displacement(attrs, pieces.windows, samples.t)
     dz = centre_z + offset[:, 2] - np.where(stance_right, foot_z["right"], foot_z["left"])
@@ -178,38 +181,49 @@ def ground_legs(walk, samples: Samples, hips: dict, toe_off_hips: np.ndarray | N
     n = len(samples.t)
     t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
     in_double_support = samples.tau <= t_ds[samples.step]
-    # each stance foot with the step it lands in (step 0's hind foot stood before the walk began)
-    feet = [(-1, walk.steps[0].hind_foot)] + [(k, walk.stance_foot(k)) for k in range(len(walk.steps))]
-    sides, rows, t_leg = [], [], []
-    for k, foot in feet:
-        sides.append(stance_leg(k) if k >= 0 else _OTHER[stance_leg(0)])
-        own = np.flatnonzero(samples.step == k)
-        later = np.flatnonzero((samples.step == k + 1) & in_double_support)
-        rows.append(np.r_[own, later])
-        t_leg.append(np.r_[_stance_times(foot, samples.tau[own]), foot.t_step + samples.tau[later]])
-    which = np.repeat(np.arange(len(feet)), [len(r) for r in rows])
-    t_leg, leg_hips = np.concatenate(t_leg), np.vstack([hips[side][r] for side, r in zip(sides, rows)])
+    # each stance foot with the step it lands in (step 0's hind foot stood before the walk began):
+    # foot f is step f - 1's stance foot; its side alternates as stance_leg's does
+    feet = [walk.steps[0].hind_foot] + [walk.stance_foot(k) for k in range(len(walk.steps))]
+    right = np.array([stance_leg(k) == "right" for k in range(-1, len(walk.steps))])
+    # every frame is on its own step's stance foot, and in the double support also on the
+    # previous step's: the rows of each foot in turn, its own step's first (as a stable sort of
+    # the feet leaves them), each in order
+    later = np.flatnonzero(in_double_support)
+    on_foot = np.concatenate([samples.step + 1, samples.step[later]])
+    order = np.argsort(on_foot, kind="stable")
+    which, rows = on_foot[order], np.concatenate([np.arange(n), later])[order]
+    own = order < n
+    tau = samples.tau[rows]
+    # the stance foot's own times: its step's tau, then t_step on in the next step's. The walk's last
+    # stance leg has no double support to complete its rules, and the walk ends at the instant it
+    # would begin: that last instant keeps the single support's pitch (a round-off before t_step)
+    complete = np.array([f.complete for f in feet])
+    t_step = np.array([f.t_step for f in feet])
+    stance_times = np.where(complete[which], tau, np.minimum(tau, np.nextafter(t_step, 0.0)[which]))
+    t_leg = np.where(own, stance_times, t_step[which] + tau)
+    leg_hips = np.where(right[which][:, None], hips["right"][rows], hips["left"][rows])
     if toe_off_hips is not None:
         # step j's hind foot is feet[j] (step 0's stood before the walk, step j's is step j - 1's stance)
-        which = np.r_[which, np.arange(len(walk.steps))]
-        t_leg = np.r_[t_leg, [s.hind_foot.t_toe_off for s in walk.steps]]
-        leg_hips = np.vstack([leg_hips, toe_off_hips])
-    legs = stance_frames([foot for _, foot in feet], which, t_leg, leg_hips)
+        which = np.concatenate([which, np.arange(len(walk.steps))])
+        t_leg = np.concatenate([t_leg, [s.hind_foot.t_toe_off for s in walk.steps]])
+        leg_hips = np.concatenate([leg_hips, toe_off_hips])
+    legs = stance_frames(feet, which, t_leg, leg_hips)
     pull = _overreach_pull(legs)
     # the knee of a leg whose foot hangs from it: the inverse kinematics of the foot's ankle
     knee = np.where(legs.overreach[:, None] > 0, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee)
-    points = {side: {name: np.full((n, 2), np.nan) for name in _POINTS} for _, side in SIDES}
-    covered = {side: np.zeros(n, bool) for _, side in SIDES}
-    start = 0
-    for (k, _), side, r in zip(feet, sides, rows):
-        mine = slice(start, start + len(r))
-        for name in _POINTS:
-            points[side][name][r] = (knee if name == "knee" else getattr(legs, name))[mine] + (pull[mine] if name in _FOOT else 0.0)
-        covered[side][r] = True
-        start += len(r)
+    # every point of both legs in one array (side, point, frame): a row per side and frame
+    mine = slice(0, len(rows))
+    side = np.where(right[which[mine]], 0, 1)
+    filled = np.full((2, len(_POINTS), n, 2), np.nan)
+    filled[side, :, rows] = np.stack([(knee if name == "knee" else getattr(legs, name))[mine]
+                                      + (pull[mine] if name in _FOOT else 0.0) for name in _POINTS], axis=1)
+    on_ground = np.zeros((2, n), bool)
+    on_ground[side, rows] = True
+    points = {name: dict(zip(_POINTS, filled[i])) for i, (_, name) in enumerate(SIDES)}
+    covered = {name: on_ground[i] for i, (_, name) in enumerate(SIDES)}
     if toe_off_hips is None:
         return points, covered
-    return points, covered, ((legs.ankle + pull)[start:], legs.pitch[start:])
+    return points, covered, ((legs.ankle + pull)[len(rows):], legs.pitch[len(rows):])
 
 
 def _overreach_pull(legs) -> np.ndarray:
@@ -271,13 +285,6 @@ def model_swing_hips(walk, step: np.ndarray, tau: np.ndarray, simulated: np.ndar
     return PelvisSchedule.per_sample([s.pelvis for s in walk.steps], step).swing_side_hips(tau, simulated)
 
 
-def _stance_times(foot, tau: np.ndarray) -> np.ndarray:
-    """The stance foot's own times at its step's ``tau``. The walk's last stance leg has no double
-    support to complete its rules, and the walk ends at the instant it would begin: that last
-    instant keeps the single support's pitch."""
-    return tau if foot.complete else np.minimum(tau, np.nextafter(foot.t_step, 0.0))
-
-
 def body_motion(walk, fps: float) -> BodyMotion:
     """The body at every frame t = k/fps, k = 0 .. floor(duration·fps), of a walk with at least one
     step (:class:`~klaw_ocp.walk.Walk`)."""
@@ -292,39 +299,51 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     support, the hind leg's stance in the previous one), so a walk of a few steps around a step
     gives that step's frames as the whole walk does (:func:`step_frames`)."""
     body, attrs = walk.spec.body, walk.spec.attributes
-    pelvis_at = lambda t: pelvis_angles_at(walk, t)
     pieces = WalkPieces.of(walk)
-    # the frames and every step's toe-off (toe_off_feet's samples, as swing_hips makes them) in
-    # one pass of the pelvis, the planes and the virtual legs: each pass costs mostly its fixed
-    # overhead of some hundred small numpy calls, not its samples
-    n, every = len(samples.t), np.arange(len(walk.steps))
+    n, m = len(samples.t), len(walk.steps)
     t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
-    both = Samples(np.r_[samples.t, pieces.starts + t_ds], np.r_[samples.step, every], np.r_[samples.tau, t_ds])
-    pelvis_both = pelvis_at(both.t)
-    planes, centre, lean, simulated = leg_planes(walk, both, pelvis_both, pieces)
+    # the steps whose swing leg the frames show: at any instant at most one leg swings, the stance
+    # leg's other one once the double support is over (where ground_legs leaves it)
+    swing_steps = np.unique(samples.step[~(samples.tau <= t_ds[samples.step])])
+    at_step, at_tau = swing_samples(walk, swing_steps)
+    # the frames, every step's toe-off (toe_off_feet's samples) and the swing legs' own samples (as
+    # swing_hips makes them) in one pass of the pelvis, the planes and the virtual legs: each pass
+    # costs mostly its fixed overhead of some hundred small numpy calls, not its samples
+    every = np.arange(m)
+    both = Samples(np.concatenate([samples.t, pieces.starts + t_ds, pieces.starts[at_step] + at_tau]),
+                   np.concatenate([samples.step, every, at_step]), np.concatenate([samples.tau, t_ds, at_tau]))
+    pelvis_both = pelvis_angles_at(walk, both.t)
+    rotation = pelvis_rotations(pelvis_both)          # (for the planes, and the frames' angles)
+    planes, centre, lean, simulated = leg_planes(walk, both, pelvis_both, pieces, rotation)
     both_hips = {side: planes.hip_in_plane(side) for _, side in SIDES}
-    toe_off_hips = np.where(pieces.stance_right[:, None], both_hips["left"][n:], both_hips["right"][n:])
+    # each leg's own hip where it swings (the stance leg's other one)
+    own_both = np.where(pieces.stance_right[both.step][:, None], both_hips["left"], both_hips["right"])
+    toe_off_hips, at_own = own_both[n:n + m], own_both[n + m:]
     planes = LegPlanes(planes.foot_z, {side: hip[:n] for side, hip in planes.hips.items()})
-    pelvis_angles, centre, lean, simulated = pelvis_both[:n], centre[:n], lean[:n], simulated[:n]
+    pelvis_angles, centre, lean, at_simulated, simulated = (pelvis_both[:n], centre[:n], lean[:n],
+                                                            simulated[n + m:], simulated[:n])
     hips = {side: hip[:n] for side, hip in both_hips.items()}
     in_plane, on_ground, toe_off = ground_legs(walk, samples, hips, toe_off_hips)
-    # at any instant at most one leg swings: both legs' swings in one pass
     swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
     rows = np.concatenate(list(swinging.values()))
-    hips_at = swing_hips(walk, pelvis_at, pieces)
     own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
-    model_hips = model_swing_hips(walk, samples.step[rows], samples.tau[rows], simulated[rows])
-    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips, own))
-    start, legs = 0, {}
+    # the model's swing hips at the swinging frames and at the swing legs' samples, in one pass
+    k = len(rows)
+    model_hips = model_swing_hips(walk, np.concatenate([samples.step[rows], at_step]),
+                                  np.concatenate([samples.tau[rows], at_tau]),
+                                  np.concatenate([simulated[rows], at_simulated]))
+    hips_at = swing_hips(walk, lambda t: pelvis_angles_at(walk, t), pieces)   # (only if the swinging steps differ)
+    swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips[:k], own),
+                       sampled=(swing_steps, (model_hips[k:], at_own)))
+    start, legs, swung = 0, {}, np.stack([swung[name] for name in _POINTS])
     for side, r in swinging.items():
-        for name in _POINTS:
-            in_plane[side][name][r] = swung[name][start:start + len(r)]
+        points = np.stack([in_plane[side][name] for name in _POINTS])     # (point, frame, 2)
+        points[:, r] = swung[:, start:start + len(r)]
         start += len(r)
-        legs[side] = LegPoints(**planes.all_to_world(side, in_plane[side]))
+        legs[side] = LegPoints(*planes.stacked_to_world(side, points))
     t, root, pelvis = samples.t, centre, pelvis_angles
-    angles = skeleton_angles(body, root, pelvis, legs, UpperBody.neutral())
+    angles = skeleton_angles(body, root, pelvis, legs, None, rotation[:n])      # the upper body's angles below
     hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
     upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis, arm_swing_at(walk, samples))
-    for name, values in upper_body_angles(upper, len(t)).items():
-        angles[:, ANGLE_NAMES.index(name)] = values
+    set_upper_body_angles(angles, upper)
     return BodyMotion(t, root, pelvis, legs, upper, angles)

@@ -98,148 +98,240 @@ def _per_frame(value, name: str, n: int) -> np.ndarray:
     a = np.asarray(value, dtype=float)
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
         raise ValueError(f"{name}: expected a scalar or shape ({n},), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():    # (the method: np.all's Python wrapper cost more than the test)
         raise ValueError(f"{name}: contains NaN or infinite values")
     return np.full(n, a)   # a copy: the caller may write into the angles
 
 
+def _norm(v: np.ndarray) -> np.ndarray:
+    """np.linalg.norm(v, axis=-1, keepdims=True), its own sum without its Python wrapper."""
+    return np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=True))
+
+
 def _unit(v: np.ndarray, name: str) -> np.ndarray:
-    norm = np.linalg.norm(v, axis=-1, keepdims=True)
-    if np.any(norm < 1e-12):
-        raise ValueError(f"{name}: zero length in frame {int(np.argmin(norm[:, 0]))}")
+    """``v`` (..., n, 3) over its length; a ValueError naming ``name`` and the first frame where it
+    has none."""
+    norm = _norm(v)
+    if (norm < 1e-12).any():
+        frame = int(np.argmin(norm[..., 0].reshape(-1, norm.shape[-2]).min(axis=0)))
+        raise ValueError(f"{name}: zero length in frame {frame}")
     return v / norm
 
 
+_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """np.cross of (n, 3) arrays, its products and differences in its order (the same bits):
-    np.cross's axis handling cost 40 us a call, 18 calls in every evaluation of the body."""
-    a0, a1, a2, b0, b1, b2 = a[:, 0], a[:, 1], a[:, 2], b[:, 0], b[:, 1], b[:, 2]
-    return np.column_stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-
-
-def _frame_from_y(y_axis: np.ndarray, hinge: np.ndarray) -> np.ndarray:
-    """Shape (n, 3, 3): axes as columns, y given, z the hinge made orthogonal to y."""
-    x = _unit(_cross(y_axis, hinge), "leg frame")
-    return np.stack([x, y_axis, _cross(x, y_axis)], axis=-1)
-
-
-def _frame_from_x(x_axis: np.ndarray, hinge: np.ndarray) -> np.ndarray:
-    """Shape (n, 3, 3): axes as columns, x given, z the hinge made orthogonal to x."""
-    y = _unit(_cross(hinge, x_axis), "foot frame")
-    return np.stack([x_axis, y, _cross(x_axis, y)], axis=-1)
+    """np.cross of (..., 3) arrays (broadcast), its products and differences in its order (the same
+    bits: a1 b2 - a2 b1, a2 b0 - a0 b2, a0 b1 - a1 b0), in seven array operations: np.cross's axis
+    handling cost 40 us a call, a component at a time nineteen operations."""
+    return a[..., _NEXT] * b[..., _AFTER] - a[..., _AFTER] * b[..., _NEXT]
 
 
 def _hinge_angle(parent: np.ndarray, child: np.ndarray) -> np.ndarray:
-    """Shape (n,): the angle about z of ``parent^T @ child`` (both share their z axis)."""
+    """Shape (..., n): the angle about z of ``parent^T @ child`` (both share their z axis)."""
     local = np.swapaxes(parent, -1, -2) @ child
-    return np.arctan2(local[:, 1, 0], local[:, 0, 0])
+    return np.arctan2(local[..., 1, 0], local[..., 0, 0])
 
 
-def pelvis_rotations(pelvis_angles: np.ndarray) -> np.ndarray:
-    """Pelvis tilt, list, rotation shape (n, 3) (rad) -> its world rotation shape (n, 3, 3)."""
-    a = frames_array(pelvis_angles, "pelvis_angles", 3)
+def _pelvis_matrices(a: np.ndarray) -> np.ndarray:
     pelvis = JOINTS[0]
     return zxy_matrices(*(sign * a[:, k] for k, sign in enumerate(pelvis.signs)))
 
 
-def hip_positions(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.ndarray) -> dict:
-    """"right"/"left" -> the hip joint centres shape (n, 3) that the pelvis pose places (m)."""
-    centre = frames_array(pelvis_center, "pelvis_center", 3)
-    rotation = pelvis_rotations(pelvis_angles)
+def pelvis_rotations(pelvis_angles: np.ndarray) -> np.ndarray:
+    """Pelvis tilt, list, rotation shape (n, 3) (rad) -> its world rotation shape (n, 3, 3)."""
+    return _pelvis_matrices(frames_array(pelvis_angles, "pelvis_angles", 3))
+
+
+def _hip_offsets(body: Body) -> dict:
     d = Dimensions.of(body)
-    return {side: centre + rotation @ np.asarray(_JOINT[f"{s}_hip"].offset(d), dtype=float)
-            for s, side in SIDES}
+    return {side: np.asarray(_JOINT[f"{s}_hip"].offset(d), dtype=float) for s, side in SIDES}
+
+
+def hip_positions(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.ndarray, rotation=None) -> dict:
+    """"right"/"left" -> the hip joint centres shape (n, 3) that the pelvis pose places (m);
+    ``rotation``: :func:`pelvis_rotations` of ``pelvis_angles`` when the caller has them."""
+    centre = frames_array(pelvis_center, "pelvis_center", 3)
+    rotation = pelvis_rotations(pelvis_angles) if rotation is None else rotation
+    return {side: centre + rotation @ offset for side, offset in _hip_offsets(body).items()}
+
+
+#: the bones whose directions give the segments' axes: (from, to, what a zero length is called)
+_BONES = (("knee", "hip", "legs: hip-knee"), ("ankle", "knee", "legs: knee-ankle"),
+          ("heel", "metatarsal", "legs: heel-metatarsal"), ("metatarsal", "toe", "legs: metatarsal-toe"))
 
 
 def leg_segment_rotations(points: LegPoints) -> dict:
-    """World rotations shape (n, 3, 3) of "thigh", "shank", "foot" and "toe" (the frames of the
-    hip, knee, ankle and toes joints) from one leg's points.
+    """World rotations shape (..., n, 3, 3) of "thigh", "shank", "foot" and "toe" (the frames of
+    the hip, knee, ankle and toes joints) from one leg's points (..., n, 3) (or several legs' at
+    once, stacked on leading axes).
 
     The common z axis is the hinge ``unit((metatarsal - heel) x (hip - ankle))``, the leg plane's
     normal: it comes from the foot, so a straight knee (thigh parallel to shank) is no special
     case. The thigh's and shank's y axes run up the bones, the foot's and toe's x axes forward.
+    The four segments are two stacked passes (leg and foot frames), not four.
     """
     hinge = _unit(_cross(points.metatarsal - points.heel, points.hip - points.ankle),
                   "legs: the leg plane (foot axis parallel to ankle-hip)")
-    return {"thigh": _frame_from_y(_unit(points.hip - points.knee, "legs: hip-knee"), hinge),
-            "shank": _frame_from_y(_unit(points.knee - points.ankle, "legs: knee-ankle"), hinge),
-            "foot": _frame_from_x(_unit(points.metatarsal - points.heel, "legs: heel-metatarsal"),
-                                  hinge),
-            "toe": _frame_from_x(_unit(points.toe - points.metatarsal, "legs: metatarsal-toe"),
-                                 hinge)}
+    bones = np.stack([getattr(points, end) - getattr(points, start) for start, end, _ in _BONES])
+    norm = _norm(bones)
+    if (norm < 1e-12).any():
+        for bone, (_, _, name) in zip(bones, _BONES):
+            _unit(bone, name)                # raises, naming the first bone without a length
+    bones = bones / norm
+    up, forward = bones[:2], bones[2:]       # thigh and shank y axes; foot and toe x axes
+    x = _unit(_cross(up, hinge), "leg frame")
+    legs = np.stack([x, up, _cross(x, up)], axis=-1)
+    y = _unit(_cross(hinge, forward), "foot frame")
+    feet = np.stack([forward, y, _cross(forward, y)], axis=-1)
+    return {"thigh": legs[0], "shank": legs[1], "foot": feet[0], "toe": feet[1]}
+
+
+_ARMS = (("shoulder_flexion", "shoulder", "flexion"), ("shoulder_abduction", "shoulder", "abduction"),
+         ("elbow_flexion", "elbow", "flexion"))
+_TOTALS = tuple(f.name for f in fields(UpperBody) if not f.name.startswith(("shoulder", "elbow")))
+#: what the upper body's angles read, in the order upper_body_angles checks them: the five totals,
+#: then each arm field's right and left values
+_SOURCES = _TOTALS + tuple((field_name, side) for field_name, _, _ in _ARMS for _, side in SIDES)
+
+
+def _upper_body_layout() -> tuple:
+    """upper_body_angles' names in its order, each one's source (an index into _SOURCES) and
+    weight (1.0 where the angle is its source itself)."""
+    layout = []
+    for name in VERTEBRAE:
+        if name in LUMBAR:
+            layout += [(f"{name}_flexion", "trunk_flexion", FLEXION_WEIGHTS[name]),
+                       (f"{name}_bending", "trunk_bending", BENDING_WEIGHTS[name])]
+        if name != "C1":
+            layout.append((f"{name}_rotation", "trunk_rotation", ROTATION_WEIGHTS[name]))
+    layout += [("C1_flexion", "head_flexion", None), ("C1_rotation", "head_rotation", None)]
+    layout += [(f"{s}_{joint}_{angle}", (field_name, side), None)
+               for field_name, joint, angle in _ARMS for s, side in SIDES]
+    names, sources, weights = zip(*layout)
+    return names, [_SOURCES.index(source) for source in sources], weights
+
+
+_UPPER_NAMES, _UPPER_SOURCES, _UPPER_WEIGHTS = _upper_body_layout()
+_WEIGHTED = [i for i, w in enumerate(_UPPER_WEIGHTS) if w is not None]
+_UNWEIGHTED = [i for i, w in enumerate(_UPPER_WEIGHTS) if w is None]
+_WEIGHTS = np.array([_UPPER_WEIGHTS[i] for i in _WEIGHTED])
+_UPPER_COLUMNS = np.array([_COLUMN[name] for name in _UPPER_NAMES])
+
+
+def _upper_body_sources(upper_body: UpperBody, n: int) -> np.ndarray:
+    """(n, len(_SOURCES)): the upper body's totals and arm angles per frame, each checked as
+    _per_frame checks it (a scalar or shape (n,), finite; a ValueError naming the first that is not)."""
+    if not isinstance(upper_body, UpperBody):
+        raise ValueError(f"upper_body: expected an UpperBody, got {type(upper_body).__name__}")
+    out = np.empty((n, len(_SOURCES)))
+    for i, source in enumerate(_SOURCES):
+        if isinstance(source, str):
+            value = getattr(upper_body, source)
+        else:
+            per_side = getattr(upper_body, source[0])
+            sided = isinstance(per_side, dict) and set(per_side) == {"right", "left"}
+            value = per_side[source[1]] if sided else None
+        a = np.asarray(value, dtype=float) if value is not None else None
+        if a is None or a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
+            break
+        out[:, i] = a
+    else:
+        if np.isfinite(out).all():
+            return out
+    # something is wrong: check one by one, in order, for the message (one finiteness test above
+    # instead of eleven)
+    for name in _TOTALS:
+        _per_frame(getattr(upper_body, name), f"upper_body.{name}", n)
+    for field_name, _, _ in _ARMS:
+        per_side = getattr(upper_body, field_name)
+        if not isinstance(per_side, dict) or set(per_side) != {"right", "left"}:
+            raise ValueError(f"upper_body.{field_name}: expected a dict with keys 'right' and 'left'")
+        for _, side in SIDES:
+            _per_frame(per_side[side], f"upper_body.{field_name}[{side!r}]", n)
+    raise AssertionError("unreachable: an upper body that failed its checks passed them one by one")
+
+
+def _upper_body_values(upper_body: UpperBody, n: int) -> np.ndarray:
+    """(n, len(_UPPER_NAMES)): upper_body_angles' values as columns, in one product for the spine."""
+    sources = _upper_body_sources(upper_body, n)
+    values = np.empty((n, len(_UPPER_NAMES)))
+    values[:, _WEIGHTED] = sources[:, [_UPPER_SOURCES[i] for i in _WEIGHTED]] * _WEIGHTS
+    values[:, _UNWEIGHTED] = sources[:, [_UPPER_SOURCES[i] for i in _UNWEIGHTED]]
+    return values
 
 
 def upper_body_angles(upper_body: UpperBody, n: int) -> dict:
     """Angle name -> shape (n,) for the spine, head and arms: the trunk totals times the weights
     (so the lumbar flexion angles sum to trunk_flexion, and so on), the head and arm angles as
     given."""
-    if not isinstance(upper_body, UpperBody):
-        raise ValueError(f"upper_body: expected an UpperBody, got {type(upper_body).__name__}")
-    totals = {f.name: _per_frame(getattr(upper_body, f.name), f"upper_body.{f.name}", n)
-              for f in fields(UpperBody) if not f.name.startswith(("shoulder", "elbow"))}
-    angles = {}
-    for name in VERTEBRAE:
-        if name in LUMBAR:
-            angles[f"{name}_flexion"] = FLEXION_WEIGHTS[name] * totals["trunk_flexion"]
-            angles[f"{name}_bending"] = BENDING_WEIGHTS[name] * totals["trunk_bending"]
-        if name != "C1":
-            angles[f"{name}_rotation"] = ROTATION_WEIGHTS[name] * totals["trunk_rotation"]
-    angles["C1_flexion"] = totals["head_flexion"]
-    angles["C1_rotation"] = totals["head_rotation"]
-    for field_name, joint, angle in (("shoulder_flexion", "shoulder", "flexion"),
-                                     ("shoulder_abduction", "shoulder", "abduction"),
-                                     ("elbow_flexion", "elbow", "flexion")):
-        per_side = getattr(upper_body, field_name)
-        if not isinstance(per_side, dict) or set(per_side) != {"right", "left"}:
-            raise ValueError(f"upper_body.{field_name}: expected a dict with keys 'right' and 'left'")
-        for s, side in SIDES:
-            angles[f"{s}_{joint}_{angle}"] = _per_frame(per_side[side],
-                                                        f"upper_body.{field_name}[{side!r}]", n)
-    return angles
+    return dict(zip(_UPPER_NAMES, _upper_body_values(upper_body, n).T.copy()))
+
+
+def set_upper_body_angles(angles: np.ndarray, upper_body: UpperBody) -> None:
+    """Write :func:`upper_body_angles` into their columns of ``angles`` (n, 56)."""
+    angles[:, _UPPER_COLUMNS] = _upper_body_values(upper_body, angles.shape[0])
 
 
 def skeleton_angles(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.ndarray, legs: dict,
-                    upper_body: UpperBody) -> np.ndarray:
+                    upper_body: UpperBody | None, pelvis_rotation: np.ndarray | None = None) -> np.ndarray:
     """The 56 angles shape (n, 56) in ANGLE_NAMES order (rad).
 
     ``pelvis_center`` shape (n, 3) (m) is the skeleton's root position; ``pelvis_angles`` shape
     (n, 3) its tilt, list and rotation; ``legs`` maps "right" and "left" to :class:`LegPoints`,
     whose hips must be where the pelvis puts them (to HIP_TOLERANCE_M); ``upper_body`` gives the
-    totals spread by :func:`upper_body_angles`.
+    totals spread by :func:`upper_body_angles` (None: those angles left 0, for a caller that fills
+    them from the legs' angles); ``pelvis_rotation``: :func:`pelvis_rotations` of ``pelvis_angles``
+    when the caller has them.
     """
     centre = frames_array(pelvis_center, "pelvis_center", 3)
     n = centre.shape[0]
     tilt_list_rotation = frames_array(pelvis_angles, "pelvis_angles", 3, n)
     if not isinstance(legs, dict) or set(legs) != {"right", "left"}:
         raise ValueError("legs: expected a dict with keys 'right' and 'left'")
-    pelvis = pelvis_rotations(tilt_list_rotation)
-    hips = hip_positions(body, centre, tilt_list_rotation)
-    out = np.empty((n, len(ANGLE_NAMES)))
+    pelvis = _pelvis_matrices(tilt_list_rotation) if pelvis_rotation is None else pelvis_rotation
+    out = np.zeros((n, len(ANGLE_NAMES)))
     for k, name in enumerate(("pelvis_tilt", "pelvis_list", "pelvis_rotation")):
         out[:, _COLUMN[name]] = tilt_list_rotation[:, k]
-    for s, side in SIDES:
-        points = legs[side]
-        if not isinstance(points, LegPoints):
-            raise ValueError(f"legs[{side!r}]: expected LegPoints, got {type(points).__name__}")
-        points = LegPoints(**{f.name: frames_array(getattr(points, f.name), f"legs[{side!r}].{f.name}", 3, n)
-                              for f in fields(LegPoints)})
-        miss = np.linalg.norm(points.hip - hips[side], axis=1)
-        if np.any(miss > HIP_TOLERANCE_M):
-            frame = int(np.argmax(miss))
-            raise ValueError(f"legs[{side!r}].hip: {miss[frame]:.3g} m from the pelvis's {side} hip "
+    both = _both_legs(legs, n)
+    hips = np.stack([centre + pelvis @ offset for offset in _hip_offsets(body).values()])
+    miss = _norm(both.hip - hips)[..., 0]
+    for (_, side), side_miss in zip(SIDES, miss):
+        if (side_miss > HIP_TOLERANCE_M).any():
+            frame = int(np.argmax(side_miss))
+            raise ValueError(f"legs[{side!r}].hip: {side_miss[frame]:.3g} m from the pelvis's {side} hip "
                              f"in frame {frame} (allowed {HIP_TOLERANCE_M} m)")
-        segments = leg_segment_rotations(points)
-        # the world-axis angles, turned into clinical ones by the joints' own signs
-        hip_axes = zxy_angles(np.swapaxes(pelvis, -1, -2) @ segments["thigh"])
-        hinges = {"knee": _hinge_angle(segments["thigh"], segments["shank"]),
-                  "ankle": _hinge_angle(segments["shank"], segments["foot"]),
-                  "toes": _hinge_angle(segments["foot"], segments["toe"])}
+    segments = leg_segment_rotations(both)
+    # the world-axis angles, turned into clinical ones by the joints' own signs
+    hip_axes = zxy_angles(np.swapaxes(pelvis, -1, -2) @ segments["thigh"])
+    hinges = _hinge_angle(np.stack([segments["thigh"], segments["shank"], segments["foot"]]),
+                          np.stack([segments["shank"], segments["foot"], segments["toe"]]))
+    for i, (s, _) in enumerate(SIDES):
         hip = _JOINT[f"{s}_hip"]
         for name, sign, value in zip(hip.angle_names, hip.signs, hip_axes):
-            out[:, _COLUMN[name]] = sign * value
-        for joint, value in hinges.items():
+            out[:, _COLUMN[name]] = sign * value[i]
+        for joint, value in zip(("knee", "ankle", "toes"), hinges):
             hinge = _JOINT[f"{s}_{joint}"]
-            out[:, _COLUMN[hinge.angle_names[0]]] = hinge.signs[0] * value
-    for name, values in upper_body_angles(upper_body, n).items():
-        out[:, _COLUMN[name]] = values
+            out[:, _COLUMN[hinge.angle_names[0]]] = hinge.signs[0] * value[i]
+    if upper_body is not None:
+        set_upper_body_angles(out, upper_body)
     return out
+
+
+def _both_legs(legs: dict, n: int) -> LegPoints:
+    """Both legs' points in one pass, stacked on a leading axis (right, left): each (2, n, 3),
+    checked as frames_array checks them (one finiteness test, not twelve)."""
+    for _, side in SIDES:
+        if not isinstance(legs[side], LegPoints):
+            raise ValueError(f"legs[{side!r}]: expected LegPoints, got {type(legs[side]).__name__}")
+    names = [f.name for f in fields(LegPoints)]
+    try:
+        points = np.array([[getattr(legs[side], name) for name in names] for _, side in SIDES], dtype=float)
+    except ValueError:      # points of different shapes
+        points = None
+    if points is None or points.shape != (2, len(names), n, 3) or not np.isfinite(points).all():
+        # the first point that is not a finite (n, 3) array raises
+        points = np.array([[frames_array(getattr(legs[side], name), f"legs[{side!r}].{name}", 3, n) for name in names]
+                           for _, side in SIDES])
+    return LegPoints(*np.swapaxes(points, 0, 1))

@@ -247,7 +247,11 @@ def segment_lengths(body: Body) -> dict:
 
 def zxy_matrices(z: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """``Rz(z) @ Rx(x) @ Ry(y)`` for angles of any common shape S (rad); returns shape S + (3, 3)."""
-    cz, sz, cx, sx, cy, sy = np.cos(z), np.sin(z), np.cos(x), np.sin(x), np.cos(y), np.sin(y)
+    return _zxy_from_trig(np.cos(z), np.sin(z), np.cos(x), np.sin(x), np.cos(y), np.sin(y))
+
+
+def _zxy_from_trig(cz, sz, cx, sx, cy, sy) -> np.ndarray:
+    """:func:`zxy_matrices` from the angles' cosines and sines."""
     rows = ((cz * cy - sz * sx * sy, -sz * cx, cz * sy + sz * sx * cy),
             (sz * cy + cz * sx * sy, cz * cx, sz * sy - cz * sx * cy),
             (-cx * sy, sx, cx * cy))
@@ -276,7 +280,7 @@ def frames_array(value, name: str, columns: int, frames: int | None = None) -> n
     a = np.asarray(value, dtype=float)
     if a.ndim != 2 or a.shape[1] != columns or (frames is not None and a.shape[0] != frames):
         raise ValueError(f"{name}: expected shape ({'n' if frames is None else frames}, {columns}), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     return a
 
@@ -284,9 +288,12 @@ def frames_array(value, name: str, columns: int, frames: int | None = None) -> n
 def local_rotations(angles: np.ndarray) -> np.ndarray:
     """Angles shape (n, 56) in ANGLE_NAMES order (rad) -> local rotations shape (n, 37, 3, 3)."""
     a = frames_array(angles, "angles", len(ANGLE_NAMES))
-    signed = np.zeros((a.shape[0], len(JOINTS), 3))
-    signed[:, _ANGLE_JOINT, _ANGLE_SLOT] = a * _ANGLE_SIGN
-    return zxy_matrices(signed[..., 0], signed[..., 1], signed[..., 2])
+    signed = a * _ANGLE_SIGN
+    # the cosines and sines of the 56 angles only (not of 37 x 3): the joints' other axes are at 0,
+    # whose cosine is 1 and sine 0
+    cos, sin = np.ones((a.shape[0], len(JOINTS), 3)), np.zeros((a.shape[0], len(JOINTS), 3))
+    cos[:, _ANGLE_JOINT, _ANGLE_SLOT], sin[:, _ANGLE_JOINT, _ANGLE_SLOT] = np.cos(signed), np.sin(signed)
+    return _zxy_from_trig(cos[..., 0], sin[..., 0], cos[..., 1], sin[..., 1], cos[..., 2], sin[..., 2])
 
 
 @dataclass(frozen=True)
@@ -311,6 +318,23 @@ class SkeletonFrames:
         return self.rotations[:, joint_index(name)]
 
 
+def _depth_levels() -> list:
+    """The non-root joints level by level, each level after its parents': (joints, their parents),
+    ints where a level has one joint (the spine's), index arrays where it has several (the legs')."""
+    depth = [0] * len(JOINTS)
+    for i in range(1, len(JOINTS)):
+        depth[i] = depth[_PARENT_INDEX[i]] + 1
+    levels = []
+    for d in range(1, max(depth) + 1):
+        joints = [i for i in range(len(JOINTS)) if depth[i] == d]
+        levels.append((joints[0], int(_PARENT_INDEX[joints[0]])) if len(joints) == 1
+                      else (np.array(joints), _PARENT_INDEX[joints]))
+    return levels
+
+
+_LEVELS = _depth_levels()
+
+
 def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray) -> SkeletonFrames:
     """World joint positions and rotations from the pelvis centre shape (n, 3) and the angles
     shape (n, 56) (rad)."""
@@ -323,16 +347,19 @@ def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray
     positions = np.empty((root.shape[0], len(JOINTS), 3))
     rotations = np.empty_like(local)
     positions[:, 0], rotations[:, 0] = root, local[:, 0]
-    # one joint at a time: the spine is a 24-deep chain, so depth gives no useful batching
-    for i in range(1, len(JOINTS)):
-        p = _PARENT_INDEX[i]
-        positions[:, i] = positions[:, p] + rotations[:, p] @ offsets[i]
-        rotations[:, i] = rotations[:, p] @ local[:, i]
-
-    def carried(joint: str, offset: tuple) -> np.ndarray:
-        k = _JOINT_INDEX[joint]
-        return positions[:, k] + rotations[:, k] @ np.asarray(offset, dtype=float)
-
-    end_sites = {name: carried(name, f(d)) for name, f in END_SITES.items()}
-    landmarks = {name: carried(joint, f(d)) for name, (joint, f) in LANDMARKS.items()}
+    # level by level (the spine is a 24-deep chain, so the legs' and arms' joints at the same depth
+    # are all the batching there is); each joint's rotation and offset products are those of a
+    # joint at a time (numpy's matmul of each 3 x 3 in a batch is that of one alone)
+    for joints, parents in _LEVELS:
+        rotations[:, joints] = rotations[:, parents] @ local[:, joints]
+    # every joint's offset turned by its parent's rotation in one product, then the sums down the chains
+    turned = (rotations[:, _PARENT_INDEX[1:]] @ offsets[1:, :, None])[..., 0]
+    for joints, parents in _LEVELS:
+        positions[:, joints] = positions[:, parents] + turned[:, joints - 1]
+    # the end sites and landmarks: their joints' positions plus their offsets turned, in one product
+    carriers = [_JOINT_INDEX[joint] for joint in END_SITES] + [_JOINT_INDEX[joint] for joint, _ in LANDMARKS.values()]
+    carried_offsets = np.array([f(d) for f in END_SITES.values()] + [f(d) for _, f in LANDMARKS.values()], dtype=float)
+    carried = positions[:, carriers] + (rotations[:, carriers] @ carried_offsets[:, :, None])[..., 0]
+    end_sites = {name: carried[:, k] for k, name in enumerate(END_SITES)}
+    landmarks = {name: carried[:, len(END_SITES) + k] for k, name in enumerate(LANDMARKS)}
     return SkeletonFrames(positions, rotations, end_sites, landmarks)

@@ -24,10 +24,14 @@ def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> V
     if any((f.foot.body, f.heel_off_theta5, f.meta_off_theta6) != shared for f in feet):
         raise ValueError("feet: the stances must share the body and the heel-off and meta-off limits")
     which, t = np.asarray(which), np.asarray(t, float)
-    shift = np.column_stack([np.array([f.foot.ankle_x for f in feet])[which], np.zeros(len(t))])
+    # each sample's stance: its rules, ankle x and rocker toe angle, one table row a stance
+    table = np.array([[getattr(f, name) for name in RULE_FIELDS] + [f.foot.ankle_x, f.rocker_theta6] for f in feet],
+                     float)[which].T
+    shift = np.zeros((len(t), 2))
+    shift[:, 0] = table[-2]
     local = np.asarray(hips, float) - shift
     geometry = replace(first, foot=FlatFoot(first.foot.body, 0.0))
-    rules = {name: np.array([getattr(f, name) for f in feet], float)[which] for name in RULE_FIELDS}
+    rules = dict(zip(RULE_FIELDS, table))
 
     def deficit(t, rows):
         kept, stance = np.zeros(int(rows.sum())), which[rows]
@@ -37,7 +41,6 @@ def stance_frames(feet, which: np.ndarray, t: np.ndarray, hips: np.ndarray) -> V
                 kept[mine] = np.interp(t[rows][mine], feet[k].single_t, feet[k].single_deficit, right=0.0)
         return kept
     pitch, fraction = rule_pitch(rules, t, local, geometry, deficit)
-    rocker_theta6 = np.array([f.rocker_theta6 for f in feet])[which]
-    legs = leg_frames(geometry, t, local, pitch, fraction, rocker_theta6, rules["t_flat"])
+    legs = leg_frames(geometry, t, local, pitch, fraction, table[-1], rules["t_flat"])
     moved = {name: getattr(legs, name) + shift for name in ("hip", "knee", "ankle", "heel", "metatarsal", "toe")}
     return replace(legs, **moved)

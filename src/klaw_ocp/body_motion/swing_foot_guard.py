@@ -60,16 +60,17 @@ def sole_heights(body, ankle_y, shank_angle, theta5, theta6) -> tuple[np.ndarray
     return heel, toe
 
 
-def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
+def _ground_window(body, theta6, ankle_y, shank) -> tuple:
+    """The θ5 range (lowest, highest) of :func:`ground_limits` with the toe angle ``theta6``, where
+    one fits (``fits``), and θ5 of the level sole (``level``), each (n,)."""
     # in the sole's backward direction α (θ5 = α - π/2 + shank; α = π: the sole level) each point
     # is ankle_y + R sin(α + ω): above the ground on the arc |α - (π/2 - ω)| <= arccos(-ankle_y/R)
     reach = body.metatarsal_reach
     heel = (np.hypot(body.l8, body.l9), math.atan2(body.l9, body.l8))
     toe_a, toe_b = -(reach + body.l13 * np.cos(theta6)), body.l9 - body.l13 * np.sin(theta6)
     toe = (np.hypot(toe_a, toe_b), np.arctan2(toe_b, toe_a))
-    lower, upper = np.full(theta5.shape, -np.inf), np.full(theta5.shape, np.inf)
-    fits = np.ones(theta5.shape, bool)
+    lower, upper = np.full(np.shape(ankle_y), -np.inf), np.full(np.shape(ankle_y), np.inf)
+    fits = np.ones(np.shape(ankle_y), bool)
     for radius, phase in (heel, toe):
         centre = math.pi / 2 - phase
         centre = centre + 2 * math.pi * np.round((math.pi - centre) / (2 * math.pi))   # nearest the level sole
@@ -81,8 +82,13 @@ def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.n
         lower = np.where(free, lower, np.maximum(lower, centre - half))
         upper = np.where(free, upper, np.minimum(upper, centre + half))
     to_theta5 = shank - math.pi / 2
-    level = math.pi + to_theta5
-    return np.where(fits, clamp(theta5, lower + to_theta5, upper + to_theta5), level), theta6
+    return lower + to_theta5, upper + to_theta5, fits, math.pi + to_theta5
+
+
+def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
+    lowest, highest, fits, level = _ground_window(body, theta6, ankle_y, shank)
+    return np.where(fits, clamp(theta5, lowest, highest), level), theta6
 
 
 def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
@@ -120,6 +126,13 @@ class _Grids:
         self.shape = (len(grids), int(self.lengths.max()))
         self.since = self.t - self.first(self.t)            # grid - grid[0], step by step
         self.duration = self.last(self.since)               # since[-1]
+        self.spacing = self.duration[self.ends - 1] / np.maximum(self.lengths - 1, 1)     # each step's grid step
+        # each point's place in the flattened rows of the padded (steps, longest) array, and in its
+        # rows reversed (one-dimensional indices: cheaper than (row, column) pairs)
+        self.flat = self.row * self.shape[1] + self.column
+        self.flat_reversed = self.row * self.shape[1] + (self.shape[1] - 1 - self.column)
+        self.near_end = np.minimum(self.since, self.duration - self.since)      # from the nearer end
+        self._rises = {}
 
     def first(self, values):
         return np.repeat(values[self.starts], self.lengths)
@@ -127,13 +140,30 @@ class _Grids:
     def last(self, values):
         return np.repeat(values[self.ends - 1], self.lengths)
 
+    def padded(self, values, fill: float, band: int = 0) -> np.ndarray:
+        """(steps, longest grid + 2 ``band``): each step's ``values`` in its row from column ``band``,
+        ``fill`` around them."""
+        padded = np.full((self.shape[0], self.shape[1] + 2 * band), fill)
+        padded.reshape(-1)[self.flat if not band else self.row * padded.shape[1] + self.column + band] = values
+        return padded
+
     def running_max(self, values, backwards=False):
         """np.maximum.accumulate of each step's part (of its reverse, reversed back: ``backwards``)."""
-        padded = np.full(self.shape, -np.inf)
-        padded[self.row, self.column] = values
+        padded = self.padded(values, -np.inf)
         if backwards:
-            return np.maximum.accumulate(padded[:, ::-1], axis=1)[:, ::-1][self.row, self.column]
-        return np.maximum.accumulate(padded, axis=1)[self.row, self.column]
+            return np.maximum.accumulate(padded[:, ::-1], axis=1).reshape(-1)[self.flat_reversed]
+        return np.maximum.accumulate(padded, axis=1).reshape(-1)[self.flat]
+
+    def fastest_rise(self, acceleration: np.ndarray) -> np.ndarray:
+        """The fastest rise from either end of each step's grid at each step's ``acceleration``
+        (rad/s²; then at GUARD_RATE) up to each point: what :func:`_smooth_turn` caps its turn by.
+        The same for every turn before an escalation: kept per acceleration."""
+        key = acceleration.tobytes()
+        if key not in self._rises:
+            a, near_end = acceleration[self.row], self.near_end
+            self._rises[key] = np.where(near_end * a < GUARD_RATE, 0.5 * a * near_end * near_end,
+                                        GUARD_RATE * near_end - 0.5 * GUARD_RATE * GUARD_RATE / a)
+        return self._rises[key]
 
     def cone_envelope(self, part, rate):
         """max_j(part_j - rate |t_i - t_j|) on each step's grid (the least function at least
@@ -155,21 +185,24 @@ class _Grids:
         (v >= part as 1/μ > 1/λ; v is semiconcave with constant 1/μ and semiconvex with 1/(λ - μ)).
         Only points within sqrt(2λ max(part)) of each other can matter, so each pass is a band of
         the padded rows, not an n x n matrix."""
-        if not np.any(part > 0):
+        if not (part > 0).any():
             return np.zeros(len(self.t))
         lam = 2.0 / np.asarray(acceleration, float)                                    # (steps,)
-        spacing = self.duration[self.ends - 1] / np.maximum(self.lengths - 1, 1)      # each step's grid step
+        spacing = self.spacing
         band = int(math.ceil(math.sqrt(2 * lam.max() * float(part.max())) / spacing.min())) + 1
         squared = (np.arange(-band, band + 1) * spacing[:, None]) ** 2                 # (steps, 2 band + 1)
-        rows, columns = self.row, self.column + band
-        padded = np.full((self.shape[0], self.shape[1] + 2 * band), -np.inf)
-        padded[rows, columns] = part
-        windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * band + 1, axis=1)
-        u = (windows - (squared / (2 * lam[:, None]))[:, None, :]).max(axis=2)
-        padded = np.full(padded.shape, np.inf)
-        padded[rows, columns] = u[self.row, self.column]
-        windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * band + 1, axis=1)
-        return (windows + (squared / lam[:, None])[:, None, :]).min(axis=2)[self.row, self.column]
+        windows = _windows(self.padded(part, -np.inf, band), 2 * band + 1)
+        u = (windows - (squared / (2 * lam[:, None]))[:, None, :]).max(axis=2)        # (steps, longest)
+        windows = _windows(self.padded(u.reshape(-1)[self.flat], np.inf, band), 2 * band + 1)
+        return (windows + (squared / lam[:, None])[:, None, :]).min(axis=2).reshape(-1)[self.flat]
+
+
+def _windows(padded: np.ndarray, width: int) -> np.ndarray:
+    """sliding_window_view(padded, width, axis=1) of a C-contiguous (rows, columns) array, a view
+    made directly (the function's Python checks cost more than the windows' arithmetic)."""
+    rows, columns = padded.shape
+    stride = padded.strides[1]
+    return np.ndarray((rows, columns - width + 1, width), padded.dtype, padded, 0, (padded.strides[0], stride, stride))
 
 
 #: how many times a step's turn may ask for four times the acceleration (GUARD_ACCELERATION up to
@@ -192,23 +225,19 @@ def _smooth_turn(grids: _Grids, required, acceleration=GUARD_ACCELERATION, escal
     requirement itself (a foot in the ground is worse than a fast knee: the first steps from rest
     whose dynamic ankle passes up to 31 mm below l9 just before heel strike, issue #36)."""
     out = np.zeros(len(grids.t))
-    near_end = np.minimum(grids.since, grids.duration - grids.since)
     for sign in (1.0, -1.0):
         part = np.maximum(sign * required, 0.0)
-        if not np.any(part > 0):
+        if not (part > 0).any():
             continue
         cone = grids.cone_envelope(part, GUARD_RATE)
         per_step = np.full(len(grids.lengths), float(acceleration))
         for attempt in range(escalations + 1):
-            a = per_step[grids.row]
             # the fastest rise from an end: at the acceleration, then at the rate
-            ends = np.where(near_end * a < GUARD_RATE, 0.5 * a * near_end * near_end,
-                            GUARD_RATE * near_end - 0.5 * GUARD_RATE * GUARD_RATE / a)
-            turn = np.minimum(grids.smooth_envelope(cone, per_step), ends)
-            short = np.unique(grids.row[turn < part - 1e-12])
-            if not len(short):
+            turn = np.minimum(grids.smooth_envelope(cone, per_step), grids.fastest_rise(per_step))
+            short = turn < part - 1e-12
+            if not short.any():
                 break
-            per_step[short] *= 4.0
+            per_step[np.unique(grids.row[short])] *= 4.0
         else:
             if final:   # still short: the requirement itself there (the ground first)
                 turn = np.maximum(turn, part)
@@ -228,34 +257,41 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
     return np.where(bend > 0, np.maximum(drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0), 0.0)
 
 
-def _turned(body, feet: list, on: _Grids, ankle_y, shank, knee):
-    """The schedule of every step on its grid, and the turn of the ground guard (rad) there:
-    (scheduled θ5, θ6, turn), concatenated in order."""
-    schedule = {name: np.repeat([getattr(f, name) for f in feet], on.lengths) for name in SCHEDULE_FIELDS}
-    scheduled, theta6 = schedule_angles(on.t, schedule, clamp, knee)
-    required = _ground_clip(body, scheduled, theta6, ankle_y, shank)[0] - scheduled
+def _turned(body, on: _Grids, scheduled, theta6, ankle_y, shank):
+    """The turn of the ground guard (rad) of the scheduled θ5 ``scheduled`` and θ6 ``theta6`` on
+    every step's grid, concatenated in order."""
+    lowest, highest, fits, level = _ground_window(body, theta6, ankle_y, shank)    # (both clips' limits)
+    required = np.where(fits, clamp(scheduled, lowest, highest), level) - scheduled
     turn = _smooth_turn(on, required)
     # the smooth turn lags where a large requirement falls off quickly (the schedule itself moving
     # towards the level sole), and so can overshoot into the other limit: the toe then goes down
     # where the heel needed the turn; clipped to both limits again, the clip smoothed too
-    back = _ground_clip(body, scheduled + turn, theta6, ankle_y, shank)[0] - scheduled - turn
+    back = np.where(fits, clamp(scheduled + turn, lowest, highest), level) - scheduled - turn
     # (capped at the ends too: there the foot is the stance foot's, on the ground by construction)
-    return scheduled, theta6, turn + _smooth_turn(on, back)
+    return turn + _smooth_turn(on, back)
 
 
-def _at_times(feet: list, times: list, on: _Grids, knee, *on_grid):
-    """θ5 and θ6 of the schedules at each step's own ``times`` (concatenated in order), the knee
-    flexion ``knee`` on the grids interpolated linearly to them, and each of ``on_grid`` (values on
-    the grids) interpolated linearly to those times."""
+def _scheduled(feet: list, on: _Grids, times: list, knee, knee_t) -> tuple:
+    """θ5, θ6 of the schedules on the grids (the knee flexion ``knee`` there) and at each step's
+    own ``times`` (``knee_t``), in one pass: ((θ5, θ6) on the grids, (θ5, θ6) at the times)."""
+    table = np.array([[getattr(f, name) for name in SCHEDULE_FIELDS] for f in feet], float)
+    rows = np.concatenate([np.repeat(table, on.lengths, axis=0), np.repeat(table, [len(t) for t in times], axis=0)])
+    theta5, theta6 = schedule_angles(np.concatenate([on.t, *times]), dict(zip(SCHEDULE_FIELDS, rows.T)), clamp,
+                                     np.concatenate([knee, knee_t]))
+    g = len(on.t)
+    return (theta5[:g], theta6[:g]), (theta5[g:], theta6[g:])
+
+
+def _at_times(times: list, on: _Grids, *on_grid) -> list:
+    """Each of ``on_grid`` (values on the grids) interpolated linearly to each step's own
+    ``times``, concatenated in order."""
     counts = [len(t) for t in times]
-    at = {name: np.repeat([getattr(f, name) for f in feet], counts) for name in SCHEDULE_FIELDS}
-    out = [np.empty(sum(counts)) for _ in (knee, *on_grid)]
+    out = [np.empty(sum(counts)) for _ in on_grid]
     for t, start, end, stop in zip(times, on.starts, on.ends, np.cumsum(counts)):
         grid, mine = on.t[start:end], slice(stop - len(t), stop)
-        for o, values in zip(out, (knee, *on_grid)):
+        for o, values in zip(out, on_grid):
             o[mine] = np.interp(t, grid, values[start:end])
-    theta5, theta6 = schedule_angles(np.concatenate(times), at, clamp, out[0])
-    return theta5, theta6, out[1:]
+    return out
 
 
 def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank, knee) -> tuple[np.ndarray, np.ndarray]:
@@ -264,9 +300,9 @@ def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank, kn
     ``shank`` and ``knee`` (m,) are the leg on all grids, concatenated in order. Returns θ5, θ6 at
     the times."""
     on = _Grids(grids)
-    _, _, turn = _turned(body, feet, on, ankle_y, shank, knee)
-    theta5, theta6, (turn_t,) = _at_times(feet, times, on, knee, turn)
-    return theta5 + turn_t, theta6
+    (scheduled, theta6), (theta5_t, theta6_t) = _scheduled(feet, on, times, knee, *_at_times(times, on, knee))
+    (turn_t,) = _at_times(times, on, _turned(body, on, scheduled, theta6, ankle_y, shank))
+    return theta5_t + turn_t, theta6_t
 
 
 def lifted_feet(body, feet: list, times: list, grids: list, hip, ankle, shank) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -277,10 +313,11 @@ def lifted_feet(body, feet: list, times: list, grids: list, hip, ankle, shank) -
     concatenated in order."""
     on = _Grids(grids)
     knee = knee_flexion_for_reach(body, np.hypot(*(ankle - hip).T))
-    scheduled, theta6, turn = _turned(body, feet, on, ankle[:, 1], shank, knee)
+    (scheduled, theta6), (theta5_t, theta6_t) = _scheduled(feet, on, times, knee, *_at_times(times, on, knee))
+    turn = _turned(body, on, scheduled, theta6, ankle[:, 1], shank)
     lowest = lowest_sole_point(body, ankle[:, 1], shank, scheduled + turn, theta6)
     lift = _ankle_lift(body, on, hip, ankle, lowest)
-    theta5_t, theta6_t, (turn_t, lift_t) = _at_times(feet, times, on, knee, turn, lift)
+    turn_t, lift_t = _at_times(times, on, turn, lift)
     return theta5_t + turn_t, theta6_t, lift_t
 
 

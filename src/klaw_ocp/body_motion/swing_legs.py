@@ -37,22 +37,32 @@ from .walk_samples import swing_curves
 TOE_OFF_BLEND = 0.5
 
 
+#: the columns of a step's swing schedule that the blends read
+_T_TOE_OFF, _T1, _T2, _T_HEEL_STRIKE = (SCHEDULE_FIELDS.index(name)
+                                        for name in ("t_toe_off", "t1", "t2", "t_heel_strike"))
+
+
+def _schedules(walk) -> np.ndarray:
+    """(steps, len(SCHEDULE_FIELDS)): each step's swing foot's schedule, one row a step (read once
+    for every pass that indexes it by step)."""
+    return np.array([[getattr(s.swing_foot, name) for name in SCHEDULE_FIELDS] for s in walk.steps], float)
+
+
 def _model_leg(body, swing, step, tau, simulated_hip):
     """The planar model's swing leg: (shank angle θ3 + θ4, ankle (n, 2)) from the simulated hip."""
     shank, _, ankle = leg_fk(body, simulated_hip, *swing(step, tau).T)
     return shank, ankle
 
 
-def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, landing):
-    """The body's swing leg before the foot's lift at samples of steps ``step`` and times ``tau``:
-    (the shank angle the scheduled foot is set on, the ankle (n, 2) in the leg's plane).
-    ``toe_off`` and ``landing``: :func:`_end_offsets` at each step's toe-off and heel strike, blended
-    out over the first TOE_OFF_BLEND of swing1 and in over swing3."""
-    shank, ankle = _model_leg(body, swing, step, tau, simulated_hip)
+def _body_leg(schedules, step, tau, model, simulated_hip, own_hip, toe_off, landing):
+    """The body's swing leg before the foot's lift at samples of steps ``step`` and times ``tau``,
+    the model's leg there ``model`` (:func:`_model_leg`): (the shank angle the scheduled foot is
+    set on, the ankle (n, 2) in the leg's plane). ``toe_off`` and ``landing``: :func:`_end_offsets`
+    at each step's toe-off and heel strike, blended out over the first TOE_OFF_BLEND of swing1 and
+    in over swing3."""
+    shank, ankle = model
     dynamic = np.hypot(*(ankle - simulated_hip).T)
-    feet = [s.swing_foot for s in walk.steps]
-    t_to, t1, t2, t_hs = (np.array([getattr(f, name) for f in feet])[step]
-                          for name in ("t_toe_off", "t1", "t2", "t_heel_strike"))
+    t_to, t1, t2, t_hs = schedules[step][:, [_T_TOE_OFF, _T1, _T2, _T_HEEL_STRIKE]].T
     leaves = 1 - smoothstep((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)))     # (smoothstep clamps to [0, 1])
     lands = smoothstep((tau - t2) / np.maximum(t_hs - t2, 1e-12))
     towards = ankle + leaves[:, None] * toe_off[0][step] + lands[:, None] * landing[0][step] - own_hip
@@ -65,76 +75,95 @@ def _body_leg(body, walk, swing, step, tau, simulated_hip, own_hip, toe_off, lan
     return shank + turn, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
 
 
-def _end_offsets(walk, swing, steps, t, simulated_hip, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
+def _end_offsets(schedules, steps, t, model, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
     """How the body's swing leg differs from the model's where it meets a virtual leg, at times
-    ``t`` of the steps ``steps`` (indices), the simulated hip there ``simulated_hip`` (k, 2): the
-    virtual leg's ankles (k, 2) and foot pitches (k,) against the model's ankle and scheduled
-    foot. Returns (the ankle offsets (all steps, 2),
-    the turns (rad, all steps) of the shank the scheduled foot is set on that give the virtual
-    foot's pitch); zero for the steps not given."""
-    body = walk.spec.body
-    ankle_offset, shank_offset = np.zeros((len(walk.steps), 2)), np.zeros(len(walk.steps))
-    if len(steps):
-        model_shank, model_ankle = _model_leg(body, swing, steps, t, simulated_hip)
-        feet = [walk.steps[k].swing_foot for k in steps]     # their schedules, in one pass
-        theta5 = schedule_angles(np.asarray(t, float), {name: np.array([getattr(f, name) for f in feet])
-                                                        for name in SCHEDULE_FIELDS}, clamp)[0]
-        ankle_offset[steps] = ankles - model_ankle
-        # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
-        shank_offset[steps] = (theta5 - np.pi / 2 + pitches) - model_shank
-    return ankle_offset, shank_offset
+    ``t`` of the steps ``steps`` (indices), the model's leg there ``model`` (:func:`_model_leg`):
+    the virtual leg's ankles (k, 2) and foot pitches (k,) against the model's ankle and scheduled
+    foot. Returns (the ankle offsets (k, 2), the turns (rad, k) of the shank the scheduled foot
+    is set on that give the virtual foot's pitch)."""
+    model_shank, model_ankle = model
+    theta5 = schedule_angles(np.asarray(t, float), dict(zip(SCHEDULE_FIELDS, schedules[steps].T)), clamp)[0]
+    # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
+    return ankles - model_ankle, (theta5 - np.pi / 2 + pitches) - model_shank
 
 
-def _landings(walk, swing, simulated_hip) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_end_offsets` at each step's heel strike (the simulated hips there (steps - 1, 2)):
-    the swing leg lands as the next stance's virtual leg starts (:mod:`klaw_ocp.kinematics.landing`:
-    its knee may be flexed, its foot then a little more toe-up about the same heel point). The
-    walk's last step has no next stance."""
-    steps = walk.steps
-    lands = [walk.stance_foot(k) for k in range(1, len(steps))]
+def _landing_feet(walk) -> tuple[np.ndarray, np.ndarray]:
+    """The next stance's virtual leg at each step's heel strike: its ankle (steps - 1, 2) and foot
+    pitch (steps - 1,) (:mod:`klaw_ocp.kinematics.landing`: its knee may be flexed, its foot then a
+    little more toe-up about the same heel point). The walk's last step has no next stance."""
+    lands = [walk.stance_foot(k) for k in range(1, len(walk.steps))]
     ankles = np.vstack([f.foot.ankle_at([f.rocker_pitch], f.meta_off_theta6) for f in lands]) if lands else np.zeros((0, 2))
-    return _end_offsets(walk, swing, np.arange(len(lands)), _heel_strikes(walk), simulated_hip, ankles,
-                        np.array([f.rocker_pitch for f in lands]))
+    return ankles, np.array([f.rocker_pitch for f in lands])
 
 
-def _heel_strikes(walk) -> np.ndarray:
-    """The step-local times of every step's heel strike but the last's (the next stance's start)."""
-    return np.array([s.swing_foot.t_heel_strike for s in walk.steps[:-1]])
+def swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The samples (steps (k,), step-local times (k,)) at which :func:`swing_legs` asks for the
+    hips when the steps ``swinging`` (unique, increasing) swing at its frames: every step's toe-off,
+    every heel strike but the last step's (it has no next stance) and each swinging step's guard
+    grid, in that order."""
+    return _swing_samples(walk, swinging)[:2]
 
 
-def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None) -> dict:
+def _swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
+    """:func:`swing_samples`, and the guard grids."""
+    steps = walk.steps
+    grids = [guard_grid(steps[k].swing_foot) for k in swinging]
+    m = len(steps)
+    return (np.concatenate([np.arange(m), np.arange(m - 1), np.repeat(swinging, [len(g) for g in grids])]),
+            np.concatenate([[s.swing_foot.t_toe_off for s in steps], [s.swing_foot.t_heel_strike for s in steps[:-1]]]
+                           + grids), grids)
+
+
+def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None, sampled=None) -> dict:
     """The swing leg in its plane at samples of steps ``step`` (n,) and step-local times ``tau``
     (n,), all after their step's toe-off: its points (n, 2), "hip" .. "toe".
     ``hips_at(step, tau)`` gives the simulated hip and the swinging leg's own hip in its plane,
     (n, 2) each, at any such samples (the frames', and each step's guard grid);
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
     at its toe-off as the body shows it (:func:`.motion.toe_off_feet`), which the swing leg
-    starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already."""
+    starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already; ``sampled``:
+    (the swinging steps, ``hips_at`` of their :func:`swing_samples`) when the caller has those.
+
+    The model's leg is evaluated once for every sample the body asks for (each step's toe-off and
+    heel strike, each swinging step's guard grid and the frames), and the body's leg once for the
+    grids and the frames: each pass costs mostly numpy's fixed overheads, not its samples."""
     body, steps = walk.spec.body, walk.steps
-    swing = swing_curves(walk)
+    swing, schedules = swing_curves(walk), _schedules(walk)
     # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
     # one pass (a pass per step costs mostly numpy's fixed overheads)
     swinging, counts = np.unique(step, return_counts=True)
-    grids = [guard_grid(steps[k].swing_foot) for k in swinging]
-    grid_step, grid_t = np.repeat(swinging, [len(g) for g in grids]), np.concatenate(grids)
-    # the hips at every toe-off, every heel strike and on the grids, in one pass
-    every, t_to, t_hs = np.arange(len(steps)), np.array([s.swing_foot.t_toe_off for s in steps]), _heel_strikes(walk)
-    at_step, at_t = np.r_[every, np.arange(len(t_hs)), grid_step], np.r_[t_to, t_hs, grid_t]
-    at_simulated, at_own = hips_at(at_step, at_t)
-    ends = len(every) + len(t_hs)
-    toe_off = _end_offsets(walk, swing, every, t_to, at_simulated[:len(every)], *toe_off_feet)
-    landing = _landings(walk, swing, at_simulated[len(every):ends])
+    at_step, at_t, grids = _swing_samples(walk, swinging)
+    if sampled is not None and np.array_equal(sampled[0], swinging):
+        at_simulated, at_own = sampled[1]
+    else:
+        at_simulated, at_own = hips_at(at_step, at_t)
     simulated, own = hips_at(step, tau) if hips is None else hips
-    shank, ankle = _body_leg(body, walk, swing, step, tau, simulated, own, toe_off, landing)
-    grid_simulated, grid_own = at_simulated[ends:], at_own[ends:]
-    grid_shank, grid_ankle = _body_leg(body, walk, swing, grid_step, grid_t, grid_simulated, grid_own, toe_off, landing)
+    m = len(steps)
+    ends = 2 * m - 1
+    end_step, end_t, grid_step, grid_t = at_step[:ends], at_t[:ends], at_step[ends:], at_t[ends:]
+    g = len(grid_t)
+    legs_step, legs_tau = np.concatenate([grid_step, step]), np.concatenate([grid_t, tau])
+    shank, ankle = _model_leg(body, swing, np.concatenate([end_step, legs_step]), np.concatenate([end_t, legs_tau]),
+                              np.concatenate([at_simulated, simulated]))
+    landing_ankles, landing_pitches = _landing_feet(walk)
+    ankle_offset, shank_offset = _end_offsets(schedules, end_step, end_t, (shank[:ends], ankle[:ends]),
+                                              np.concatenate([toe_off_feet[0], landing_ankles]),
+                                              np.concatenate([toe_off_feet[1], landing_pitches]))
+    # at the toe-offs, and at the heel strikes (the last step's none: zero)
+    toe_off = (ankle_offset[:m], shank_offset[:m])
+    landing = (np.concatenate([ankle_offset[m:], np.zeros((1, 2))]), np.concatenate([shank_offset[m:], np.zeros(1)]))
+    legs_own = np.concatenate([at_own[ends:], own])
+    legs_shank, legs_ankle = _body_leg(schedules, legs_step, legs_tau, (shank[ends:], ankle[ends:]),
+                                       np.concatenate([at_simulated[ends:], simulated]), legs_own, toe_off, landing)
     order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
     theta5, theta6, lift = np.empty(len(tau)), np.empty(len(tau)), np.empty(len(tau))
     theta5[order], theta6[order], lift[order] = lifted_feet(
         body, [steps[k].swing_foot for k in swinging], np.split(tau[order], np.cumsum(counts)[:-1]), grids,
-        grid_own, grid_ankle, grid_shank)
+        legs_own[:g], legs_ankle[:g], legs_shank[:g])
+    shank, ankle = legs_shank[g:], legs_ankle[g:]
     heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
-    up = np.column_stack([np.zeros(len(tau)), lift])   # the foot carried up with the lifted ankle
+    up = np.zeros((len(tau), 2))
+    up[:, 1] = lift                                  # the foot carried up with the lifted ankle
     ankle, heel, metatarsal, toe = ankle + up, heel + up, metatarsal + up, toe + up
     _, _, knee = leg_ik(body, own, ankle)
     return {"hip": own, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}

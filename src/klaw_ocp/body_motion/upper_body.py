@@ -68,7 +68,7 @@ def _vector(value, name: str, n: int | None = None) -> np.ndarray:
     a = np.asarray(value, dtype=float)
     if a.ndim != 1 or (n is not None and a.shape[0] != n):
         raise ValueError(f"{name}: expected shape ({'n' if n is None else n},), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"{name}: contains NaN or infinite values")
     return a
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -77,7 +78,8 @@ def spline_rates(t_nodes, values) -> np.ndarray:
     differences (np.gradient) over the distinct node times; a repeated node takes the rate of
     the first node at its time (the value is the same there: nothing jumps)."""
     t_nodes, values = np.asarray(t_nodes, float), np.asarray(values, float)
-    distinct = np.r_[True, np.diff(t_nodes) > 0]
+    distinct = np.empty(len(t_nodes), bool)
+    distinct[0], distinct[1:] = True, t_nodes[1:] > t_nodes[:-1]     # (np.diff(t_nodes) > 0)
     if distinct.sum() < 2:
         return np.zeros_like(values)
     rates = gradient(values[distinct], t_nodes[distinct])
@@ -110,14 +112,15 @@ class StepCurves:
         """``pieces``: (step index, node times τ (m,), values (m, c), rates (m, c) per second), in
         walk order."""
         t_step = np.asarray(t_step, float)
-        u = np.concatenate([k + np.asarray(tau, float) / t_step[k] for k, tau, _, _ in pieces])
-        rates = [np.asarray(r, float) * t_step[k] for k, _, _, r in pieces]
         node_step = np.repeat([k for k, *_ in pieces], [len(tau) for _, tau, _, _ in pieces])
+        # (the pieces' nodes at once: each node's own step, as piece by piece)
+        u = node_step + np.concatenate([tau for _, tau, _, _ in pieces]).astype(float) / t_step[node_step]
+        rates = np.vstack([r for *_, r in pieces]).astype(float) * t_step[node_step][:, None]
         own = np.flatnonzero((np.diff(u) > 0) & (node_step[1:] == node_step[:-1]))
         first, last = np.zeros(len(t_step), int), np.zeros(len(t_step), int)
         first[node_step[own][::-1]] = own[::-1]       # of repeated indices the last assignment wins
         last[node_step[own]] = own
-        return cls(t_step, u, np.vstack([v for _, _, v, _ in pieces]), np.vstack(rates), first, last)
+        return cls(t_step, u, np.vstack([v for _, _, v, _ in pieces]).astype(float), rates, first, last)
 
     def __call__(self, step: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c).
@@ -127,8 +130,17 @@ class StepCurves:
         ulp short of t_step) can round to that u, where the next step's curve (another stance
         origin, the other leg) would be taken."""
         u = step + tau / self.t_step[step]
-        interval = np.clip(_positive_interval(self.u, u), self.first[step], self.last[step])
+        intervals, interval_starts = self._intervals
+        k = np.searchsorted(interval_starts, u, side="right") - 1
+        k = intervals[np.minimum(np.maximum(k, 0), len(intervals) - 1)]     # _positive_interval's
+        interval = np.minimum(np.maximum(k, self.first[step]), self.last[step])
         return hermite(self.u, self.values, self.rates, u, interval)
+
+    @cached_property
+    def _intervals(self) -> tuple[np.ndarray, np.ndarray]:
+        """The nodes that start an interval of positive length, and their u (every call reads them)."""
+        intervals = np.flatnonzero(np.diff(self.u) > 0)
+        return intervals, self.u[intervals]
 
 
 def stance_curves(walk) -> StepCurves:
@@ -145,7 +157,8 @@ def stance_at(walk, curves: StepCurves, step: np.ndarray, tau: np.ndarray) -> tu
     lean θ2 (n,)."""
     w, theta1, theta2 = curves(step, tau).T
     origin_x = np.array([s.origin_x for s in walk.steps])[step]
-    hip = np.column_stack([origin_x + w * np.sin(theta1), walk.spec.body.l9 + w * np.cos(theta1)])
+    hip = np.empty((len(w), 2))
+    hip[:, 0], hip[:, 1] = origin_x + w * np.sin(theta1), walk.spec.body.l9 + w * np.cos(theta1)
     return hip, theta2
 
 
@@ -157,10 +170,13 @@ def swing_curves(walk) -> StepCurves:
     pieces = []
     for k, step in enumerate(walk.steps):
         swing1, swing2, swing3 = (step.subphase(name) for name in ("swing1", "swing2", "swing3"))
-        x = swing1.states
-        pieces.append((k, swing1.t, x[:, 6:8], np.column_stack([x[:, 8], spline_rates(swing1.t, x[:, 7])])))
+        x, rates = swing1.states, np.empty((len(swing1.t), 2))
+        rates[:, 0], rates[:, 1] = x[:, 8], spline_rates(swing1.t, x[:, 7])
+        pieces.append((k, swing1.t, x[:, 6:8], rates))
         x = swing2.states
         pieces.append((k, swing2.t, x[:, 6:8], x[:, 8:10]))
-        x, zero = swing3.states, np.zeros(len(swing3.t))      # states [stance(6), θ3, θ̇3]
-        pieces.append((k, swing3.t, np.column_stack([x[:, 6], zero]), np.column_stack([x[:, 7], zero])))
+        x = swing3.states                                     # states [stance(6), θ3, θ̇3]
+        values, rates = np.zeros((len(swing3.t), 2)), np.zeros((len(swing3.t), 2))
+        values[:, 0], rates[:, 0] = x[:, 6], x[:, 7]
+        pieces.append((k, swing3.t, values, rates))
     return StepCurves.of(t_step, pieces)
