@@ -151,8 +151,11 @@ def _series_figure(run, columns, title: str, axis_height: float):
         return _empty(run, title.lower())
     recoveries = swing2_recoveries(run)
     handles = _subphase_handles(recoveries)
-    ncols = 7 if not recoveries else 4
-    legend_rows = -(-len(handles) // ncols)
+    # the subphases and boundaries in one row; a recovery's long label in its own row below
+    shade = [h for h in handles if isinstance(h, Patch)]
+    handles = [h for h in handles if not isinstance(h, Patch)]
+    ncols = len(handles)
+    legend_rows = 1 + len(shade)
     note, spans = drawn_note(len(run.steps)), part_spans(run)
     top = _TOP + (_NOTE_ROW if note else 0.0)
     bottom = _XLABEL + legend_rows * _LEGEND_ROW + 0.12
@@ -175,8 +178,11 @@ def _series_figure(run, columns, title: str, axis_height: float):
         ax.set_xlim(*span)
     fig.suptitle(f"{title}: {run.label}" + (f"\n{note}" if note else ""), fontsize=FONT_PT + 2,
                  y=1 - 0.1 / height, va="top")
-    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=ncols,
-               fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
+    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, (0.06 + len(shade) * _LEGEND_ROW) / height),
+               ncols=ncols, fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
+    if shade:
+        fig.legend(handles=shade, loc="lower center", bbox_to_anchor=(0.5, 0.06 / height), ncols=1,
+                   fontsize=FONT_PT, frameon=False, borderaxespad=0.0)
     return fig
 
 
