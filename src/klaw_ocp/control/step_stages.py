@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -180,8 +181,8 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
     pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
     # the pitch at which the knee has its toe-off flexion (the knee's schedule ends there)
     # and the least pitch at which the leg reaches its ankle at all (toe_off_pitch's floor), in one pass
-    reach = float(reach_for_knee_flexion(hind.foot.body, hind.knee_toe_off)) / hind.foot.body.l1
-    wanted, least = hind.reach_pitch(np.vstack([hip_to, hip_to]), np.array([reach, REACH_FRACTION]))
+    wanted, least = hind.reach_pitch(np.array([hip_to, hip_to]), np.array([_reach_of(hind.foot.body, hind.knee_toe_off),
+                                                                          REACH_FRACTION]))
     pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, float(wanted), plan.constraints.theta3, float(least))
     hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds, hip_toe_off=hip_to)
     ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
@@ -193,7 +194,8 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
     # the double support's nodes, then toe-off, the window's start and a moment before toe-off
     # (the ankle's rate there, which the swing foot starts with), in one pass
     m = len(ds_nodes)
-    legs = hind.frames(np.r_[t0 + stance.t[ds_nodes], t0 + t_to, t0 + (t_to - window), t0 + (t_to - ANKLE_RATE_STEP)],
+    ends = [t0 + t_to, t0 + (t_to - window), t0 + (t_to - ANKLE_RATE_STEP)]       # np.r_ cost ~10 us
+    legs = hind.frames(np.concatenate([t0 + stance.t[ds_nodes], ends]),
                        np.vstack([hips[ds_nodes], hip_to, hip_to - window * hip_vel_to,
                                   hip_to - ANKLE_RATE_STEP * hip_vel_to]))
     return DoubleSupport(t=stance.t[ds_nodes], theta3=np.array(legs.theta3[:m]), theta4=np.array(legs.theta4[:m]),
@@ -204,6 +206,12 @@ def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.
                          theta6_toe_off=float(legs.theta6[m]),
                          theta5d_toe_off=float(legs.theta5[m] - legs.theta5[m + 2]) / ANKLE_RATE_STEP, hind_foot=hind,
                          samples=(t0 + stance.t[ds_nodes], hips[ds_nodes]))
+
+
+@lru_cache(maxsize=64)
+def _reach_of(body: Body, knee: float) -> float:
+    """The reach (a fraction of l1) of the knee flexed by ``knee``: the same knee every step."""
+    return float(reach_for_knee_flexion(body, knee)) / body.l1
 
 
 def thigh_peak(attrs, constraints) -> float:

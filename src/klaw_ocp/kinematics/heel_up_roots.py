@@ -143,31 +143,37 @@ def _band_root(foot: FlatFoot, q: float, band: float, hips: np.ndarray, radius: 
 def _band_root_few(foot: FlatFoot, q: float, band: float, hx: list, hy: list, radius: list,
                    far: list, near: list) -> list:
     """:func:`_band_root` on Python floats (lists of the few hips' x, y and the rest): every hip
-    steps until all have met, as the arrays do, so that each root is the one they give."""
+    steps until all have met, as the arrays do, so that each root is the one they give. The
+    distances of all hips in one numpy hypot a step (its numbers are the arrays' to the bit)."""
     body = foot.body
     off_x, off_y, l13 = -body.metatarsal_reach, body.l9, body.l13
     toe_x = foot.ankle_x + body.metatarsal_reach + body.l13
     n, a0, b0, quarter, half = len(hx), q - band, q + band, 4 * band, 2 * band
     a, b = [a0] * n, [b0] * n
     p = [a0 + (b0 - a0) * fa / (fa - fb) for fa, fb in zip(far, near)]
+    cos, sin, rows = math.cos, math.sin, range(n)
     for _ in range(_BAND_STEPS):
-        terms = []
-        for i in range(n):
-            lever = p[i] - q + band
+        terms, axs, ays = [], [], []
+        for i in rows:
+            pi = p[i]
+            lever = pi - q + band
             rise = lever * lever / quarter
-            c, s, cb, sb = math.cos(p[i]), math.sin(p[i]), math.cos(rise), math.sin(rise)
-            ax = toe_x - l13 * cb + (c * off_x + s * off_y) - hx[i]
-            ay = l13 * sb + (-s * off_x + c * off_y) - hy[i]
-            dist = float(_hypot(ax, ay))
-            terms.append((lever, c, s, cb, sb, ax, ay, dist, dist - radius[i]))
-        if all(abs(term[-1]) <= _BAND_TOL for term in terms):
+            c, s, cb, sb = cos(pi), sin(pi), cos(rise), sin(rise)
+            axs.append(toe_x - l13 * cb + (c * off_x + s * off_y) - hx[i])
+            ays.append(l13 * sb + (-s * off_x + c * off_y) - hy[i])
+            terms.append((lever, c, s, cb, sb))
+        dists = _hypot(axs, ays).tolist()
+        gs = [dist - r for dist, r in zip(dists, radius)]
+        if all(abs(g) <= _BAND_TOL for g in gs):
             return p
         new = []
-        for i, (lever, c, s, cb, sb, ax, ay, dist, g) in enumerate(terms):
+        for i in rows:
+            lever, c, s, cb, sb = terms[i]
+            ax, ay, g = axs[i], ays[i], gs[i]
             rate = lever / half
             dax = l13 * sb * rate + (-s * off_x + c * off_y)
             day = l13 * cb * rate + (-c * off_x - s * off_y)
-            slope = (ax * dax + ay * day) / dist
+            slope = (ax * dax + ay * day) / dists[i]
             if g > 0:
                 a[i] = p[i]
             else:
@@ -194,9 +200,10 @@ def reach_pitch(foot: FlatFoot, meta_off_theta6: float, hips: np.ndarray, radius
     or nearer: 0 if the flat foot's is, else where the heel-up ankle meets the hip's circle
     (MAX_PITCH if it never does)."""
     g = heel_up(foot.body, meta_off_theta6)
+    if len(hips) <= _FEW:    # the radii as a list (np.broadcast_to alone cost 3-5 us a call)
+        radius = np.asarray(radius, float)
+        return _reach_pitch_few(foot, g, hips, radius.tolist() if radius.ndim else [float(radius)] * len(hips))
     radius = np.broadcast_to(np.asarray(radius, float), (len(hips),))
-    if len(hips) <= _FEW:
-        return _reach_pitch_few(foot, g, hips, radius)
     dx, dy = (g.pivot_x + foot.ankle_x) - hips[:, 0], g.pivot_y - hips[:, 1]
     pitch = _least(g, _on_circle(g, dx, dy, np.hypot(dx, dy), radius))
     reaches_flat = np.hypot(foot.ankle[0] - hips[:, 0], foot.ankle[1] - hips[:, 1]) <= radius
@@ -229,50 +236,57 @@ def _pieces(body: Body, meta_off_theta6: float) -> tuple:
                  for r, phi, p0, lo, hi in zip(*(column[:, 0].tolist() for column in columns)))
 
 
-def _reach_pitch_few(foot: FlatFoot, g: HeelUp, hips: np.ndarray, radius: np.ndarray) -> np.ndarray:
+@lru_cache(maxsize=64)
+def _pivots(body: Body, meta_off_theta6: float) -> tuple:
+    """The two pivots' x and y (flat ankle at x = 0) as floats, and the band's ends (:func:`_band_ends`)."""
+    g = heel_up(body, meta_off_theta6)
+    return (*g.pivot_x[:, 0].tolist(), *g.pivot_y[:, 0].tolist()), _band_ends(body, meta_off_theta6).tolist()
+
+
+def _reach_pitch_few(foot: FlatFoot, g: HeelUp, hips: np.ndarray, radius: list) -> np.ndarray:
     """:func:`reach_pitch` hip by hip on Python floats (see _FEW): :func:`_on_circle`'s two
     intersections about each pivot, :func:`_least`'s choice, the band's root where it lies there."""
-    hx, hy = hips[:, 0], hips[:, 1]
-    # the two pivots less the hips, and the flat ankle's: one hypot
+    n, foot_x = len(hips), foot.ankle_x
+    (px0, px1, py0, py1), ((far_x, far_y), (near_x, near_y)) = _pivots(foot.body, g.q)
     ankle_x, ankle_y = foot.ankle.tolist()
-    dx = np.array([*(g.pivot_x[:, 0] + foot.ankle_x).tolist(), ankle_x])[:, None] - hx
-    dy = np.array([*g.pivot_y[:, 0].tolist(), ankle_y])[:, None] - hy
-    *dists, flat = np.hypot(dx, dy).tolist()
-    headings = np.arctan2(dy[:2], dx[:2]).tolist()
-    radius, pieces, n = radius.tolist(), _pieces(foot.body, g.q), len(hips)
+    # the two pivots less the hips, and the flat ankle's (3, 2, n): one hypot, one arctan2
+    d = np.array([[px0 + foot_x, py0], [px1 + foot_x, py1], [ankle_x, ankle_y]])[:, :, None] - hips.T
+    *dists, flat = np.hypot(d[:, 0], d[:, 1]).tolist()
+    headings = np.arctan2(d[:2, 1], d[:2, 0]).tolist()
+    pieces = _pieces(foot.body, g.q)
     # |pivot + r e(psi) - hip| = radius  <=>  d . e(psi) = k, psi = phi - (p - p0), as _on_circle
-    ks = [[((big * big - d * d) - rr) / r2 for big, d in zip(radius, dists_i)]
+    ks = [[((big * big - dj * dj) - rr) / r2 for big, dj in zip(radius, dists_i)]
           for (_, rr, r2, *_), dists_i in zip(pieces, dists)]
-    spreads = np.arccos([[clamp_float(k / (d if d > 0 else 1.0), -1.0, 1.0) for k, d in zip(ks_i, dists_i)]
+    spreads = np.arccos([[clamp_float(k / (dj if dj > 0 else 1.0), -1.0, 1.0) for k, dj in zip(ks_i, dists_i)]
                          for ks_i, dists_i in zip(ks, dists)]).tolist()
     pitch, pi, turn = [math.inf] * n, math.pi, 2 * math.pi
     for (_, _, _, phi, p0, lo, lo_edge, hi_edge), dists_i, ks_i, headings_i, spreads_i in zip(
             pieces, dists, ks, headings, spreads):
-        for j, (d, k, heading, spread) in enumerate(zip(dists_i, ks_i, headings_i, spreads_i)):
-            if not (d > 0 and abs(k) <= d):
+        for j in range(n):
+            dj, k = dists_i[j], ks_i[j]
+            if not (dj > 0 and abs(k) <= dj):
                 continue                   # the circles do not meet: NaN, never inside
+            heading, spread, least = headings_i[j], spreads_i[j], pitch[j]
             for psi in (heading + spread, heading + -spread):
                 candidate = p0 + ((phi - psi + pi) % turn - pi)
                 if lo_edge <= candidate <= hi_edge:
                     candidate = candidate if candidate >= lo else lo
-                    if candidate < pitch[j]:
-                        pitch[j] = candidate
+                    if candidate < least:
+                        least = candidate
+            pitch[j] = least
     reaches_flat = [f <= big for f, big in zip(flat, radius)]
     if g.band > 0:
         # no root about the metatarsal head: where the band's ends bracket the reach, the root is in it
-        start, rows = g.q - g.band + _EDGE, []
-        ends = _band_ends(foot.body, g.q)
-        (far_x, far_y), (near_x, near_y) = ends.tolist()
-        for j in range(n):
-            if pitch[j] > start and not reaches_flat[j]:
-                x, y = float(hx[j]), float(hy[j])
-                far = _hypot(far_x + foot.ankle_x - x, far_y - y) - radius[j]
-                near = _hypot(near_x + foot.ankle_x - x, near_y - y) - radius[j]
-                if far > 0 and near <= 0:
-                    rows.append((j, x, y, radius[j], far, near))
-        if rows:
-            roots = _band_root_few(foot, g.q, g.band, *map(list, zip(*(row[1:] for row in rows))))
-            for (j, *_), root in zip(rows, roots):
-                pitch[j] = root
+        start = g.q - g.band + _EDGE
+        rows = [j for j in range(n) if pitch[j] > start and not reaches_flat[j]]
+        if rows:   # the band's ends' distances for those hips in one hypot each
+            hx, hy, big = [float(hips[j, 0]) for j in rows], [float(hips[j, 1]) for j in rows], [radius[j] for j in rows]
+            far = (_hypot([far_x + foot_x - x for x in hx], [far_y - y for y in hy]) - big).tolist()
+            near = (_hypot([near_x + foot_x - x for x in hx], [near_y - y for y in hy]) - big).tolist()
+            inside = [i for i, (f, e) in enumerate(zip(far, near)) if f > 0 and e <= 0]
+            if inside:
+                columns = ([column[i] for i in inside] for column in (hx, hy, big, far, near))
+                for i, root in zip(inside, _band_root_few(foot, g.q, g.band, *columns)):
+                    pitch[rows[i]] = root
     return np.array([0.0 if flat_j else (p if p <= MAX_PITCH or p != p else MAX_PITCH)
                      for flat_j, p in zip(reaches_flat, pitch)])

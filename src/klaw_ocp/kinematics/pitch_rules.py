@@ -231,14 +231,44 @@ def _one_stance_few(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, defi
         pitch = [0.0] * n
     flats = np.hypot(ankle_x - hips[:, 0], ankle_y - hips[:, 1]).tolist()
     l3, l4, l1, width = body.l3, body.l4, body.l1, rules["heel_blend"]
-    # the schedule's reach, and 2 x width beyond it at foot flat (rule_pitch's comments)
+    # the schedule's reach, and 2 x width beyond it at foot flat (rule_pitch's comments);
+    # _knee_float, _ramp_float and _soft_plus_float written out with the stance's constants
+    # taken once (the same operations in the same order: a few us a sample less)
     t_quarter, lengths, lever = t_flat + 0.25 * (rules["t_knee"] - t_flat), l3 * l3 + l4 * l4, 2 * l3 * l4
+    t_knee, knee_floor, knee_hold, t_hold = rules["t_knee"], rules["knee_floor"], rules["knee_hold"], rules["t_hold"]
+    span, span_quarter, span_knee = t_knee - t_flat, t_quarter - t_flat, rules["t_knee_end"] - t_knee
+    span_knee, rise, hold, widths = span_knee if span_knee > 0 else 1.0, rules["knee_toe_off"] - knee_floor, \
+        knee_hold > 0, 4 * width
+    sqrt, cos = math.sqrt, math.cos
     fraction, off = [1.0] * n, []
     for j in up:
         tj, flat = times[j], flats[j]
-        reach = math.sqrt(lengths + lever * math.cos(_knee_float(tj, rules))) \
-            + 2 * width * (1 - _ramp_float(tj, t_flat, t_quarter))
-        keep = flat - _soft_plus_float(flat - reach, width)
+        if span > 0:
+            u = (tj - t_flat) / span
+            u = u if u >= 0.0 or u != u else 0.0
+            u = u if u <= 1.0 or u != u else 1.0
+            ramp = u * u * (3 - 2 * u)
+        else:
+            ramp = 1.0
+        u = (tj - t_knee) / span_knee
+        u = u if u >= 0.0 or u != u else 0.0
+        u = u if u <= 1.0 or u != u else 1.0
+        knee = knee_floor * ramp + rise * u * u
+        if tj >= t_hold and hold:
+            knee = knee_hold + _soft_plus_float(knee - knee_hold, KNEE_HOLD_BLEND)
+        if span_quarter > 0:
+            u = (tj - t_flat) / span_quarter
+            u = u if u >= 0.0 or u != u else 0.0
+            u = u if u <= 1.0 or u != u else 1.0
+            u = u * u * (3 - 2 * u)
+        else:
+            u = 1.0
+        reach = sqrt(lengths + lever * cos(knee)) + 2 * width * (1 - u)
+        v = flat - reach
+        if width <= 0:
+            keep = flat - (v if v >= 0.0 or v != v else 0.0)
+        else:
+            keep = flat - (0.0 if v <= -width else (v if v >= width else (v + width) * (v + width) / widths))
         fraction[j] = keep / l1
         if keep < flat:
             off.append(j)
@@ -250,7 +280,8 @@ def _one_stance_few(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, defi
     if deficit is not None and single:
         mask = np.zeros(n, bool)
         mask[single] = True
-        added = np.broadcast_to(np.asarray(deficit(t, mask), float), (len(single),)).tolist()
+        added = np.asarray(deficit(t, mask), float)     # one per single-support sample, or a number
+        added = added.tolist() if added.ndim else [float(added)] * len(single)
         p.update((j, p[j] + d) for j, d in zip(single, added))
     floor = rules["pitch_ds_floor"]
     for j in up:

@@ -44,7 +44,7 @@ from . import heel_up_roots
 from .landing import LANDING_FOOT_RATE, landing_pitch, least_landing_knee
 from .leg_geometry import (FlatFoot, ankle_angle, foot_pieces, knee_flexion_for_reach, leg_ik, leg_ik_float,
                            meta_off_band, reach_for_knee_flexion)
-from .pitch_rules import HEEL_BLEND_REL, REACH_FRACTION, RULE_FIELDS, knee_schedule, rocker_left, rule_pitch
+from .pitch_rules import HEEL_BLEND_REL, REACH_FRACTION, RULE_FIELDS, _knee_float, knee_schedule, rocker_left, rule_pitch
 NORMAL, HEEL_OFF, META_OFF = "normal", "heel_off", "meta_off"
 _PERIODS = np.array([NORMAL, HEEL_OFF, META_OFF])      # by (pitch > 0) + (pitch in or past the meta-off band)
 
@@ -177,11 +177,15 @@ class StanceFoot:
         """The foot's pitch at stance times ``t`` with the hips ``hips`` (n, 2)."""
         return self._rule_pitch(np.asarray(t, float), np.asarray(hips, float))[0]
 
+    def _rules(self) -> dict:
+        """The numbers of this stance's rules (:data:`.pitch_rules.RULE_FIELDS`)."""
+        return {name: getattr(self, name) for name in RULE_FIELDS}
+
     def _rule_pitch(self, t, hips):
         """:func:`.pitch_rules.rule_pitch` of this stance: the pitch and the reach fraction."""
         def deficit(t, rows):
             return np.interp(t[rows], self.single_t, self.single_deficit, right=0.0) if self.single_t else 0.0
-        return rule_pitch({name: getattr(self, name) for name in RULE_FIELDS}, t, hips, self, deficit)
+        return rule_pitch(self._rules(), t, hips, self, deficit)
 
     def knee_schedule(self, t) -> np.ndarray:
         """The knee's schedule at stance times ``t`` (rad; :func:`.pitch_rules.knee_schedule`)."""
@@ -214,11 +218,11 @@ class StanceFoot:
         if up.size and self.heel_blend > 0:
             k = up[0]
             flat = np.hypot(*(self.foot.ankle - hips[k]))
-            schedule = float(self.knee_schedule(t[k]))
+            schedule = _knee_float(float(t[k]), self._rules())     # one sample: on floats, the same number
             # held where the flat foot's knee is at θ5's limit, unless the schedule asks for more
             hold = float(knee_flexion_for_reach(self.foot.body, flat + self.heel_blend))
             if hold > schedule:
-                foot = replace(self, knee_hold=hold, t_hold=float(t[k]))
+                foot = _replace(self, knee_hold=hold, t_hold=float(t[k]))
         pitch = foot.pitch(t, hips)
         off = np.flatnonzero((pitch > 0) & after_flat)
         first = self.t_step
@@ -229,7 +233,7 @@ class StanceFoot:
         single = after_flat & (t < self.t_step)
         deficit = np.zeros(len(t))
         deficit[single] = np.maximum.accumulate(pitch[single]) - pitch[single] if single.any() else 0.0
-        return replace(foot, t_heel_off=first, single_t=tuple(t[single]), single_deficit=tuple(deficit[single]))
+        return _replace(foot, t_heel_off=first, single_t=tuple(t[single]), single_deficit=tuple(deficit[single]))
 
     @property
     def starts_standing(self) -> bool:
@@ -258,15 +262,23 @@ class StanceFoot:
             start = self.pitch_at_other_heel_strike(hip_at_other_heel_strike)
         t_toe_off = self.t_step + t_ds
         t_knee = t_toe_off - self.knee_lead if math.isfinite(self.knee_lead) else self.t_knee
-        foot = replace(self, t_toe_off=t_toe_off, t_knee_end=t_toe_off, t_knee=min(t_knee, t_toe_off),
-                       pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start))
+        foot = _replace(self, t_toe_off=t_toe_off, t_knee_end=t_toe_off, t_knee=min(t_knee, t_toe_off),
+                        pitch_ds_floor=start, pitch_toe_off=max(pitch_toe_off, start))
         if hip_toe_off is not None:
             hip = np.atleast_2d(np.asarray(hip_toe_off, float))
             if abs(float(foot.pitch(np.array([t_toe_off]), hip)[0]) - foot.pitch_toe_off) > 1e-12:
                 ankle = self._ankle(np.array([foot.pitch_toe_off]))
                 knee = float(knee_flexion_for_reach(self.foot.body, np.hypot(*(ankle[0] - hip[0]))))
-                foot = replace(foot, knee_toe_off=knee)
+                foot = _replace(foot, knee_toe_off=knee)
         return foot
+
+
+def _replace(foot: StanceFoot, **changes) -> StanceFoot:
+    """``dataclasses.replace(foot, **changes)`` without its checks of every field (5 us a call, four
+    calls a step): StanceFoot has no ``__post_init__``, so a copy of its fields is the same foot."""
+    new = object.__new__(type(foot))
+    new.__dict__.update(foot.__dict__, **changes)
+    return new
 
 
 def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_theta6, t_flat) -> VirtualLegFrames:
