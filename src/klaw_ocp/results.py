@@ -154,10 +154,32 @@ def step_table(step, body, step_offsets: list | None = None) -> dict:
     """The rows of one step in :func:`walk_table`'s columns: a walk's table is its steps' tables
     one after the other (no row depends on a later step), so a run can write them as they come
     (``step_offsets``: its :func:`hip_offsets`, when the caller has them)."""
+    if step_offsets is None:
+        # step_hip_offsets' numbers, its np.split's pieces as plain slices (the served step's
+        # table: each numpy wrapper's fixed cost is this function's time)
+        offsets = stance_hips(body, np.concatenate([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
+        ends = np.cumsum([len(sub.states) for sub in step.subphases]).tolist()
+        step_offsets = [offsets[a:b] for a, b in zip([0, *ends[:-1]], ends)]
     columns = _step_columns(step, _step_hips(body, step, step_offsets))
-    columns["hip_y_ref"] = _hip_reference_curves([step], body, [columns["t"]])[0]
-    return {c: np.array(list(columns[c])) if c == "subphase" else np.asarray(columns[c]).astype(float)
+    columns["hip_y_ref"] = _step_hip_reference(step, body, columns["t"])
+    # every column is a new array or a view of one made here (np.concatenate always makes one):
+    # float ones are kept, not copied again
+    return {c: np.array(list(columns[c])) if c == "subphase" else np.asarray(columns[c]).astype(float, copy=False)
             for c in COLUMNS}
+
+
+def _step_hip_reference(step, body, t_world: np.ndarray) -> np.ndarray:
+    """:func:`_hip_reference_curves` of one step: the same formula on the same per-row arrays
+    (each a value repeated; np.full's, not np.repeat's wrapper), without the walk's grouping."""
+    n = len(t_world)
+    if not step.hip_reference:
+        return np.full(n, np.nan)
+    ref = step.hip_reference
+    row = lambda v: np.full(n, v, dtype=float)
+    shape = [row(ref[k]) for k in ("y_start", "y_end", "excursion")]
+    shape += [row(ref.get(k, v)) for k, v in (("rise", 0.5), ("fall", 0.5), ("power", 1.0), ("settle", 1.0))]
+    y, _ = hip_height_reference(np.asarray(t_world, float) - step.t_start, row(step.plan.timings.t_step), *shape)
+    return y + body.l9
 
 
 def hip_dip(body, stance, offsets: np.ndarray | None = None) -> float:

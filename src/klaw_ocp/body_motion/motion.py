@@ -210,7 +210,9 @@ def ground_legs(walk, samples: Samples, hips: dict, toe_off_hips: np.ndarray | N
     legs = stance_frames(feet, which, t_leg, leg_hips)
     pull = _overreach_pull(legs)
     # the knee of a leg whose foot hangs from it: the inverse kinematics of the foot's ankle
-    knee = np.where(legs.overreach[:, None] > 0, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee)
+    # (where no leg overreaches, np.where would pick every one of legs.knee: the inverse kinematics skipped)
+    over = legs.overreach[:, None] > 0
+    knee = np.where(over, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee) if over.any() else legs.knee
     # every point of both legs in one array (side, point, frame): a row per side and frame
     mine = slice(0, len(rows))
     side = np.where(right[which[mine]], 0, 1)

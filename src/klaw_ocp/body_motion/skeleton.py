@@ -18,6 +18,7 @@ positive). A joint with fewer angles uses the subset. World rotations compose pa
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Callable
 
 import numpy as np
@@ -335,6 +336,21 @@ def _depth_levels() -> list:
 _LEVELS = _depth_levels()
 
 
+#: the joints that carry the end sites, then the landmarks
+_CARRIERS = [_JOINT_INDEX[joint] for joint in END_SITES] + [_JOINT_INDEX[joint] for joint, _ in LANDMARKS.values()]
+
+
+@lru_cache(maxsize=16)
+def _fk_offsets(body: Body) -> tuple[np.ndarray, np.ndarray]:
+    """The joints' offsets (37, 3), then the end sites' and landmarks' from their carriers, of a
+    body: the same at every frame of every step (read-only: cached and shared)."""
+    d = Dimensions.of(body)
+    offsets = np.array([j.offset(d) for j in JOINTS], dtype=float)
+    carried = np.array([f(d) for f in END_SITES.values()] + [f(d) for _, f in LANDMARKS.values()], dtype=float)
+    offsets.flags.writeable = carried.flags.writeable = False
+    return offsets, carried
+
+
 def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray) -> SkeletonFrames:
     """World joint positions and rotations from the pelvis centre shape (n, 3) and the angles
     shape (n, 56) (rad)."""
@@ -342,8 +358,7 @@ def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray
     local = local_rotations(angles)
     if local.shape[0] != root.shape[0]:
         raise ValueError(f"root_position: {root.shape[0]} frames but angles has {local.shape[0]}")
-    d = Dimensions.of(body)
-    offsets = np.array([j.offset(d) for j in JOINTS], dtype=float)
+    offsets, carried_offsets = _fk_offsets(body) if isinstance(body, Body) else _fk_offsets.__wrapped__(body)
     positions = np.empty((root.shape[0], len(JOINTS), 3))
     rotations = np.empty_like(local)
     positions[:, 0], rotations[:, 0] = root, local[:, 0]
@@ -351,15 +366,19 @@ def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray
     # are all the batching there is); each joint's rotation and offset products are those of a
     # joint at a time (numpy's matmul of each 3 x 3 in a batch is that of one alone)
     for joints, parents in _LEVELS:
-        rotations[:, joints] = rotations[:, parents] @ local[:, joints]
+        if isinstance(joints, int):    # the spine's: the product written in place (its own matmul)
+            np.matmul(rotations[:, parents], local[:, joints], out=rotations[:, joints])
+        else:
+            rotations[:, joints] = rotations[:, parents] @ local[:, joints]
     # every joint's offset turned by its parent's rotation in one product, then the sums down the chains
     turned = (rotations[:, _PARENT_INDEX[1:]] @ offsets[1:, :, None])[..., 0]
     for joints, parents in _LEVELS:
-        positions[:, joints] = positions[:, parents] + turned[:, joints - 1]
+        if isinstance(joints, int):
+            np.add(positions[:, parents], turned[:, joints - 1], out=positions[:, joints])
+        else:
+            positions[:, joints] = positions[:, parents] + turned[:, joints - 1]
     # the end sites and landmarks: their joints' positions plus their offsets turned, in one product
-    carriers = [_JOINT_INDEX[joint] for joint in END_SITES] + [_JOINT_INDEX[joint] for joint, _ in LANDMARKS.values()]
-    carried_offsets = np.array([f(d) for f in END_SITES.values()] + [f(d) for _, f in LANDMARKS.values()], dtype=float)
-    carried = positions[:, carriers] + (rotations[:, carriers] @ carried_offsets[:, :, None])[..., 0]
+    carried = positions[:, _CARRIERS] + (rotations[:, _CARRIERS] @ carried_offsets[:, :, None])[..., 0]
     end_sites = {name: carried[:, k] for k, name in enumerate(END_SITES)}
     landmarks = {name: carried[:, len(END_SITES) + k] for k, name in enumerate(LANDMARKS)}
     return SkeletonFrames(positions, rotations, end_sites, landmarks)

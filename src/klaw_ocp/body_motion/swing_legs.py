@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.points import foot_points_arrays
-from ..kinematics.leg_geometry import clamp, leg_fk, leg_ik, smoothstep
+from ..kinematics.leg_geometry import clamp, foot_pieces, leg_fk, leg_ik, smoothstep
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .swing_foot_guard import guard_grid, lifted_feet
 from .walk_samples import swing_curves
@@ -92,7 +92,10 @@ def _landing_feet(walk) -> tuple[np.ndarray, np.ndarray]:
     pitch (steps - 1,) (:mod:`klaw_ocp.kinematics.landing`: its knee may be flexed, its foot then a
     little more toe-up about the same heel point). The walk's last step has no next stance."""
     lands = [walk.stance_foot(k) for k in range(1, len(walk.steps))]
-    ankles = np.vstack([f.foot.ankle_at([f.rocker_pitch], f.meta_off_theta6) for f in lands]) if lands else np.zeros((0, 2))
+    # each landing's one ankle on floats (FootPieces.ankle_float: FlatFoot.ankle_at's numbers, held
+    # to them by tests/test_few_sample_paths.py), not an array pass per landing
+    ankles = (np.array([foot_pieces(f.foot.body, f.meta_off_theta6).ankle_float(f.foot.ankle_x, float(f.rocker_pitch))
+                        for f in lands]) if lands else np.zeros((0, 2)))
     return ankles, np.array([f.rocker_pitch for f in lands])
 
 

@@ -32,7 +32,7 @@ def frame_times(duration: float, fps: float) -> np.ndarray:
 def _positive_interval(t_nodes: np.ndarray, t: np.ndarray) -> np.ndarray:
     """For each time in ``t``, the node i that starts its interval [t_i, t_i+1] of positive length
     (clamped to the first and last such interval outside the nodes' span)."""
-    intervals = np.flatnonzero(np.diff(t_nodes) > 0)
+    intervals = np.flatnonzero(t_nodes[1:] - t_nodes[:-1] > 0)      # (np.diff's numbers)
     k = np.searchsorted(t_nodes[intervals], t, side="right") - 1
     return intervals[np.clip(k, 0, len(intervals) - 1)]
 
@@ -44,13 +44,17 @@ def hermite(t_nodes, values, rates, t, interval=None) -> np.ndarray:
     t_nodes, t = np.asarray(t_nodes, float), np.asarray(t, float)
     values, rates = np.asarray(values, float), np.asarray(rates, float)
     i = _positive_interval(t_nodes, t) if interval is None else interval
-    h = t_nodes[i + 1] - t_nodes[i]
-    s = (t - t_nodes[i]) / h
+    j = i + 1
+    start = t_nodes[i]
+    h = t_nodes[j] - start
+    s = (t - start) / h
     if values.ndim == 2:
         s, h = s[:, None], h[:, None]
-    h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
-    h01, h11 = s * s * (3 - 2 * s), s * s * (s - 1)
-    return h00 * values[i] + h10 * h * rates[i] + h01 * values[i + 1] + h11 * h * rates[i + 1]
+    # (the factors used twice computed once: the same numbers)
+    rest, squared = (1 - s) ** 2, s * s
+    h00, h10 = (1 + 2 * s) * rest, s * rest
+    h01, h11 = squared * (3 - 2 * s), squared * (s - 1)
+    return h00 * values[i] + h10 * h * rates[i] + h01 * values[j] + h11 * h * rates[j]
 
 
 def gradient(f: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -58,7 +62,7 @@ def gradient(f: np.ndarray, x: np.ndarray) -> np.ndarray:
     central differences weighted by the spacings inside (plain ones where the spacing is
     uniform), one-sided at the ends. numpy's general form took 50 us a call (dynamics.csv's
     rates: three a step; the body's swing1 knee: one a step)."""
-    dx = np.diff(x)
+    dx = x[1:] - x[:-1]         # np.diff's numbers, without its wrapper
     out = np.empty(len(f))
     if (dx == dx[0]).all():
         out[1:-1] = (f[2:] - f[:-2]) / (2. * dx[0])
@@ -80,7 +84,7 @@ def spline_rates(t_nodes, values) -> np.ndarray:
     t_nodes, values = np.asarray(t_nodes, float), np.asarray(values, float)
     distinct = np.empty(len(t_nodes), bool)
     distinct[0], distinct[1:] = True, t_nodes[1:] > t_nodes[:-1]     # (np.diff(t_nodes) > 0)
-    if distinct.sum() < 2:
+    if np.count_nonzero(distinct) < 2:
         return np.zeros_like(values)
     rates = gradient(values[distinct], t_nodes[distinct])
     return rates[np.cumsum(distinct) - 1]
@@ -115,12 +119,13 @@ class StepCurves:
         node_step = np.repeat([k for k, *_ in pieces], [len(tau) for _, tau, _, _ in pieces])
         # (the pieces' nodes at once: each node's own step, as piece by piece)
         u = node_step + np.concatenate([tau for _, tau, _, _ in pieces]).astype(float) / t_step[node_step]
-        rates = np.vstack([r for *_, r in pieces]).astype(float) * t_step[node_step][:, None]
-        own = np.flatnonzero((np.diff(u) > 0) & (node_step[1:] == node_step[:-1]))
+        # (np.concatenate: np.vstack's numbers for these (m, c) pieces, without its wrapper)
+        rates = np.concatenate([r for *_, r in pieces]).astype(float) * t_step[node_step][:, None]
+        own = np.flatnonzero((u[1:] - u[:-1] > 0) & (node_step[1:] == node_step[:-1]))   # (np.diff's numbers)
         first, last = np.zeros(len(t_step), int), np.zeros(len(t_step), int)
         first[node_step[own][::-1]] = own[::-1]       # of repeated indices the last assignment wins
         last[node_step[own]] = own
-        return cls(t_step, u, np.vstack([v for _, _, v, _ in pieces]).astype(float), rates, first, last)
+        return cls(t_step, u, np.concatenate([v for _, _, v, _ in pieces]).astype(float), rates, first, last)
 
     def __call__(self, step: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c).
@@ -139,7 +144,7 @@ class StepCurves:
     @cached_property
     def _intervals(self) -> tuple[np.ndarray, np.ndarray]:
         """The nodes that start an interval of positive length, and their u (every call reads them)."""
-        intervals = np.flatnonzero(np.diff(self.u) > 0)
+        intervals = np.flatnonzero(self.u[1:] - self.u[:-1] > 0)      # (np.diff's numbers)
         return intervals, self.u[intervals]
 
 

@@ -40,7 +40,7 @@ def lowest_ankle(body, swings, origin_x: float, pelvis) -> float:
     height, which the thigh's peak does not change."""
     swings = [s for s in swings if s.name != "swing1"]
     t = np.concatenate([s.t for s in swings])
-    x = np.vstack([s.states[:, :7] for s in swings])
+    x = np.concatenate([s.states[:, :7] for s in swings])     # (np.vstack's, without its wrapper)
     knee = np.concatenate([s.states[:, 7] if s.name != "swing3" else np.zeros(len(s.t)) for s in swings])
     hips = pelvis.swing_side_hips(t, stance_hips(body, x[:, :6], np.array([origin_x, body.l9]))[0])
     y = leg_fk(body, hips, x[:, 6], knee)[2][:, 1]

@@ -40,8 +40,9 @@ def leg_fk(body: Body, hip: np.ndarray, theta3, theta4) -> tuple[np.ndarray, np.
     θ3 + θ4, the knee = hip - l3 (sin θ3, cos θ3) and the ankle = knee - l4 (sin, cos)(θ3 + θ4)
     (n, 2); :func:`leg_ik` inverts it."""
     shank = theta3 + theta4
-    knee = hip - body.l3 * np.column_stack([np.sin(theta3), np.cos(theta3)])
-    return shank, knee, knee - body.l4 * np.column_stack([np.sin(shank), np.cos(shank)])
+    # np.column_stack's numbers written column by column (its wrapper cost more than the sums)
+    knee = _points(hip[:, 0] - body.l3 * np.sin(theta3), hip[:, 1] - body.l3 * np.cos(theta3))
+    return shank, knee, _points(knee[:, 0] - body.l4 * np.sin(shank), knee[:, 1] - body.l4 * np.cos(shank))
 
 
 def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -58,9 +59,17 @@ def leg_ik(body: Body, hip: np.ndarray, ankle: np.ndarray) -> tuple[np.ndarray, 
     # the cosine law loses half the digits (1e-8 rad, 1e-8 m of hip)
     s = (l3 + l4 + d) / 2
     short = (l3 + l4 - d) / 2                          # s - d, exactly 0 for a straight leg
-    root = lambda v: np.sqrt(np.maximum(v, 0.0))
-    delta = 2 * np.arctan2(root((s - l3) * short), root(s * (s - l4)))     # at the hip
-    theta4 = 2 * np.arctan2(root(s * short), root((s - l3) * (s - l4)))     # knee flexion
+    # the four square roots' arguments in one array, so that their clip at 0, roots and the two
+    # arctangents are a call each (numpy's fixed cost per call was this function's time); rows:
+    # the hip's half-angle (y, x), then the knee's
+    s3, s4 = s - l3, s - l4
+    roots = np.empty((4,) + s.shape)
+    np.multiply(s3, short, out=roots[0])
+    np.multiply(s, s4, out=roots[1])
+    np.multiply(s, short, out=roots[2])
+    np.multiply(s3, s4, out=roots[3])
+    np.sqrt(np.maximum(roots, 0.0, out=roots), out=roots)
+    delta, theta4 = 2 * np.arctan2(roots[0::2], roots[1::2])     # at the hip; knee flexion
     theta3 = beta - delta
     knee = _points(hx - l3 * np.sin(theta3), hy - l3 * np.cos(theta3))
     return theta3, theta4, knee
@@ -194,7 +203,11 @@ class FootPieces:
     def turned(self, ankle_x: float, p: np.ndarray, points=slice(None)) -> np.ndarray:
         """The foot's ``points`` (n, len(points), 2) at pitches ``p`` (n,), its flat ankle at
         ``ankle_x``."""
-        rocker = (p < 0)[:, None]
+        below = p < 0
+        rocking = np.count_nonzero(below)
+        if rocking == 0 or rocking == len(p):
+            return self._turned_one_way(ankle_x, p, points, rocking > 0)
+        rocker = below[:, None]
         beta = np.where(p < 0, 0.0, p - toe_flexion(np.maximum(p, 0.0), self.q))   # the toe segment's rise
         pivot_x = np.where(rocker[:, 0], self.heel[0], self.toe[0] - self.l13 * np.cos(beta)) + ankle_x
         pivot_y = np.where(rocker[:, 0], self.heel[1], self.l13 * np.sin(beta))
@@ -203,6 +216,22 @@ class FootPieces:
         out = np.empty(v.shape)
         out[..., 0] = pivot_x[:, None] + (c * v[..., 0] + s * v[..., 1])
         out[..., 1] = pivot_y[:, None] + (-s * v[..., 0] + c * v[..., 1])
+        return out
+
+    def _turned_one_way(self, ankle_x: float, p: np.ndarray, points, rocker: bool) -> np.ndarray:
+        """:meth:`turned` where every pitch is on one side of 0 (its np.where's then pick one
+        side whole: the same numbers, without the selections and the side not taken)."""
+        if rocker:
+            pivot_x, pivot_y, v = self.heel[0] + ankle_x, self.heel[1], self.heel_offsets[points]
+        else:
+            beta = p - toe_flexion(np.maximum(p, 0.0), self.q)      # the toe segment's rise
+            pivot_x = (self.toe[0] - self.l13 * np.cos(beta) + ankle_x)[:, None]
+            pivot_y = (self.l13 * np.sin(beta))[:, None]
+            v = self.meta_offsets[points]
+        c, s = np.cos(p)[:, None], np.sin(p)[:, None]
+        out = np.empty((len(p),) + v.shape)
+        out[..., 0] = pivot_x + (c * v[:, 0] + s * v[:, 1])
+        out[..., 1] = pivot_y + (-s * v[:, 0] + c * v[:, 1])
         return out
 
     def ankle_float(self, ankle_x: float, p: float) -> tuple[float, float]:

@@ -82,10 +82,16 @@ class PelvisSchedule:
         there; with the stance hips' velocities ``hip_vels``, (hips, velocities)."""
         (dx, dy), rates = _offset_and_rate(self.width, self.rotation_start, self.rotation_end, self.list_peak,
                                            self.t_step, np.asarray(t, float), hip_vels is not None)
-        other = np.asarray(hips, float) + np.column_stack([dx, dy])
+        # the sums written into their columns (np.column_stack's wrapper cost more than them)
+        other = np.array(hips, float)
+        other[..., 0] += dx
+        other[..., 1] += dy
         if hip_vels is None:
             return other
-        return other, np.asarray(hip_vels, float) + np.column_stack(rates)
+        vels = np.array(hip_vels, float)
+        vels[..., 0] += rates[0]
+        vels[..., 1] += rates[1]
+        return other, vels
 
 
 def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops):
@@ -123,9 +129,13 @@ def _offset_and_rate(width, rotation_start, rotation_end, list_peak, t_step, t, 
 
 
 def pelvis_angles(rotation_start, rotation_end, list_peak, t_step, t, ops=np):
-    """(rotation, list) (rad) at step times ``t`` (see the module's docstring)."""
-    rotation, lowered = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops)
-    return rotation[0], lowered[0]
+    """(rotation, list) (rad) at step times ``t`` (see the module's docstring): the first terms of
+    :func:`_angles_and_rates`, by its expressions, without the rates and accelerations it would
+    compute and drop (two thirds of the body's pelvis work)."""
+    k = math.pi / t_step
+    a = k * t
+    span = rotation_start + rotation_end
+    return span * (1 + ops.cos(a)) / 2 - rotation_end, list_peak * ops.sin(a) ** 2
 
 
 def swing_hip_offset(width, rotation_start, rotation_end, list_peak, t_step, t, ops=np):

@@ -130,6 +130,18 @@ def _finite(values, digits: int) -> list:
     return out
 
 
+def _finite_columns(table, names, digits: int) -> dict:
+    """:func:`_finite` of each of ``table``'s columns ``names`` (of one length), rounded and tested
+    as one array (the same numbers: rounding is elementwise; a call per column cost more)."""
+    a = np.round(np.array([table[c] for c in names], float), digits)
+    out = a.tolist()
+    bad = np.flatnonzero(~np.isfinite(a).ravel())
+    if len(bad):
+        for i in bad.tolist():
+            out[i // a.shape[1]][i % a.shape[1]] = None
+    return dict(zip(names, out))
+
+
 def skeleton_message(body) -> dict:
     """The bones the page draws: each joint's parent, and the end sites (toes, head top, hands)."""
     names = [j.name for j in JOINTS]
@@ -158,7 +170,7 @@ def step_message(ready, body, attrs, planned) -> dict:
         "attributes": {name: plan.attributes.get(name) for name in STEP_ATTRIBUTES},
         "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
         "frames": {"t": _finite(frames.t, 6), "points": np.rint(points * 1000).astype(np.int64).reshape(len(frames.t), -1).tolist()},
-        "dynamics": {**{c: _finite(table[c], 4) for c in STRIP_COLUMNS},
+        "dynamics": {**_finite_columns(table, STRIP_COLUMNS, 4),
                      "subphase": np.asarray(table["subphase"]).astype(str).tolist()},
         "subphases": subphases, "solve_ms": round(ready.solve_s * 1000, 2), "planned": planned,
     }

@@ -185,7 +185,7 @@ class MultipleShootingSolver:
         trajectory returned (``residual``: Newton's own, of this very point), path margins,
         plausibility."""
         spec, n = pb.spec, self.intervals
-        states = np.vstack([pb.x0, np.asarray(nodes).reshape(n, spec.nx)])
+        states = np.concatenate([pb.x0[None, :], np.asarray(nodes).reshape(n, spec.nx)])   # (np.vstack's numbers)
         if residual is None:
             t, h = pb.grid[:-1], pb.h
             final = float(np.abs(kernels.final(states[-1], pb.context)[0]).max())
