@@ -243,26 +243,12 @@ def _one_stance_few(rules: dict, t: np.ndarray, hips: np.ndarray, geometry, defi
     fraction, off = [1.0] * n, []
     for j in up:
         tj, flat = times[j], flats[j]
-        if span > 0:
-            u = (tj - t_flat) / span
-            u = u if u >= 0.0 or u != u else 0.0
-            u = u if u <= 1.0 or u != u else 1.0
-            ramp = u * u * (3 - 2 * u)
-        else:
-            ramp = 1.0
-        u = (tj - t_knee) / span_knee
-        u = u if u >= 0.0 or u != u else 0.0
-        u = u if u <= 1.0 or u != u else 1.0
+        ramp = _smoothstep_float((tj - t_flat) / span) if span > 0 else 1.0
+        u = clamp_float((tj - t_knee) / span_knee, 0.0, 1.0)
         knee = knee_floor * ramp + rise * u * u
         if tj >= t_hold and hold:
             knee = knee_hold + _soft_plus_float(knee - knee_hold, KNEE_HOLD_BLEND)
-        if span_quarter > 0:
-            u = (tj - t_flat) / span_quarter
-            u = u if u >= 0.0 or u != u else 0.0
-            u = u if u <= 1.0 or u != u else 1.0
-            u = u * u * (3 - 2 * u)
-        else:
-            u = 1.0
+        u = _smoothstep_float((tj - t_flat) / span_quarter) if span_quarter > 0 else 1.0
         reach = sqrt(lengths + lever * cos(knee)) + 2 * width * (1 - u)
         v = flat - reach
         if width <= 0:
