@@ -207,20 +207,15 @@ class FootPieces:
         rocking = np.count_nonzero(below)
         if rocking == 0 or rocking == len(p):
             return self._turned_one_way(ankle_x, p, points, rocking > 0)
-        rocker = below[:, None]
-        beta = np.where(p < 0, 0.0, p - toe_flexion(np.maximum(p, 0.0), self.q))   # the toe segment's rise
-        pivot_x = np.where(rocker[:, 0], self.heel[0], self.toe[0] - self.l13 * np.cos(beta)) + ankle_x
-        pivot_y = np.where(rocker[:, 0], self.heel[1], self.l13 * np.sin(beta))
-        v = np.where(rocker[:, :, None], self.heel_offsets[points], self.meta_offsets[points])
-        c, s = np.cos(p)[:, None], np.sin(p)[:, None]
-        out = np.empty(v.shape)
-        out[..., 0] = pivot_x[:, None] + (c * v[..., 0] + s * v[..., 1])
-        out[..., 1] = pivot_y[:, None] + (-s * v[..., 0] + c * v[..., 1])
+        # some pitches on each side: each side as a foot of its own (the same numbers per pitch)
+        out = np.empty((len(p),) + self.heel_offsets[points].shape)
+        out[below] = self._turned_one_way(ankle_x, p[below], points, True)
+        out[~below] = self._turned_one_way(ankle_x, p[~below], points, False)
         return out
 
     def _turned_one_way(self, ankle_x: float, p: np.ndarray, points, rocker: bool) -> np.ndarray:
-        """:meth:`turned` where every pitch is on one side of 0 (its np.where's then pick one
-        side whole: the same numbers, without the selections and the side not taken)."""
+        """:meth:`turned` of pitches all on one side of 0: about the heel (``rocker``, p < 0) or
+        about the metatarsal head, the toe segment risen."""
         if rocker:
             pivot_x, pivot_y, v = self.heel[0] + ankle_x, self.heel[1], self.heel_offsets[points]
         else:

@@ -80,8 +80,8 @@ class PelvisSchedule:
     def swing_side_hips(self, t, hips, hip_vels=None):
         """The pelvis's other hip (n, 2) at step times ``t`` from the stance hips ``hips`` (n, 2)
         there; with the stance hips' velocities ``hip_vels``, (hips, velocities)."""
-        (dx, dy), rates = _offset_and_rate(self.width, self.rotation_start, self.rotation_end, self.list_peak,
-                                           self.t_step, np.asarray(t, float), hip_vels is not None)
+        (dx, dy), *rates = swing_hip_offset(self.width, self.rotation_start, self.rotation_end, self.list_peak,
+                                            self.t_step, np.asarray(t, float), order=0 if hip_vels is None else 1)
         # the sums written into their columns (np.column_stack's wrapper cost more than them)
         other = np.array(hips, float)
         other[..., 0] += dx
@@ -89,67 +89,49 @@ class PelvisSchedule:
         if hip_vels is None:
             return other
         vels = np.array(hip_vels, float)
-        vels[..., 0] += rates[0]
-        vels[..., 1] += rates[1]
+        vels[..., 0] += rates[0][0]
+        vels[..., 1] += rates[0][1]
         return other, vels
 
 
-def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops):
-    """(rotation, list) at step times ``t`` and their first and second time derivatives:
-    rotation = span (1 + cos a)/2 − ψ1 and list = φ sin² a = φ (1 − cos 2a)/2, a = π t/t_step."""
+def _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops, order: int = 2):
+    """(rotation, list) at step times ``t`` and their time derivatives up to ``order``, each a
+    tuple of order + 1 terms: rotation = span (1 + cos a)/2 − ψ1 and list = φ sin² a =
+    φ (1 − cos 2a)/2, a = π t/t_step. The body asks for the angles alone and the hips for their
+    rates: the terms they would drop were most of the pelvis's numpy calls."""
     k = math.pi / t_step   # a float, an array (one schedule per sample) or a CasADi symbol
     a = k * t
     span = rotation_start + rotation_end
-    rotation = (span * (1 + ops.cos(a)) / 2 - rotation_end,
-                -span * k * ops.sin(a) / 2,
-                -span * k * k * ops.cos(a) / 2)
-    lowered = (list_peak * ops.sin(a) ** 2,
-               list_peak * k * ops.sin(2 * a),
-               2 * list_peak * k * k * ops.cos(2 * a))
-    return rotation, lowered
-
-
-def _offset_and_rate(width, rotation_start, rotation_end, list_peak, t_step, t, rate: bool):
-    """:func:`swing_hip_offset`'s (Δx, Δy) and, with ``rate``, (Δx', Δy') (else None), by the same
-    expressions (each sine and cosine once): the hips ask for no acceleration, whose terms were
-    most of the numpy calls of a step's two evaluations."""
-    k = math.pi / t_step
-    a = k * t
-    span = rotation_start + rotation_end
-    cos_a, sin_a = np.cos(a), np.sin(a)
-    r = span * (1 + cos_a) / 2 - rotation_end
-    q = list_peak * sin_a ** 2
-    sr, cr, sq = np.sin(r), np.cos(r), np.sin(q)
-    offset = (-width * sr, -width * cr * sq)
-    if not rate:
-        return offset, None
-    r1 = -span * k * sin_a / 2
-    q1 = list_peak * k * np.sin(2 * a)
-    return offset, (-width * cr * r1, width * (sr * r1 * sq - cr * np.cos(q) * q1))
+    cos_a, sin_a = ops.cos(a), ops.sin(a)
+    rotation, lowered = [span * (1 + cos_a) / 2 - rotation_end], [list_peak * sin_a ** 2]
+    if order >= 1:
+        rotation.append(-span * k * sin_a / 2)
+        lowered.append(list_peak * k * ops.sin(2 * a))
+    if order >= 2:
+        rotation.append(-span * k * k * cos_a / 2)
+        lowered.append(2 * list_peak * k * k * ops.cos(2 * a))
+    return tuple(rotation), tuple(lowered)
 
 
 def pelvis_angles(rotation_start, rotation_end, list_peak, t_step, t, ops=np):
-    """(rotation, list) (rad) at step times ``t`` (see the module's docstring): the first terms of
-    :func:`_angles_and_rates`, by its expressions, without the rates and accelerations it would
-    compute and drop (two thirds of the body's pelvis work)."""
-    k = math.pi / t_step
-    a = k * t
-    span = rotation_start + rotation_end
-    return span * (1 + ops.cos(a)) / 2 - rotation_end, list_peak * ops.sin(a) ** 2
+    """(rotation, list) (rad) at step times ``t`` (see the module's docstring)."""
+    rotation, lowered = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops, order=0)
+    return rotation[0], lowered[0]
 
 
-def swing_hip_offset(width, rotation_start, rotation_end, list_peak, t_step, t, ops=np):
+def swing_hip_offset(width, rotation_start, rotation_end, list_peak, t_step, t, ops=np, order: int = 2):
     """((Δx, Δy), (Δx', Δy'), (Δx'', Δy'')): the swing-side hip minus the stance hip in the sagittal
-    plane and its time derivatives at step times ``t``."""
-    (r, r1, r2), (q, q1, q2) = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops)
-    sr, cr, sq, cq = ops.sin(r), ops.cos(r), ops.sin(q), ops.cos(q)
-    # dx = -l0 sin r
-    dx = -width * sr
-    dx1 = -width * cr * r1
-    dx2 = width * (sr * r1 * r1 - cr * r2)
-    # dy = -l0 cos r sin q
-    dy = -width * cr * sq
-    dy1 = width * (sr * r1 * sq - cr * cq * q1)
-    dy2 = width * (cr * r1 * r1 * sq + sr * r2 * sq + 2 * sr * r1 * cq * q1
-                   + cr * sq * q1 * q1 - cr * cq * q2)
-    return (dx, dy), (dx1, dy1), (dx2, dy2)
+    plane and its time derivatives at step times ``t``, up to ``order`` (the tuple that long)."""
+    (r, *rr), (q, *qq) = _angles_and_rates(rotation_start, rotation_end, list_peak, t_step, t, ops, order)
+    sr, cr, sq = ops.sin(r), ops.cos(r), ops.sin(q)
+    # dx = -l0 sin r, dy = -l0 cos r sin q
+    out = [(-width * sr, -width * cr * sq)]
+    if order >= 1:
+        (r1, *_), (q1, *_), cq = rr, qq, ops.cos(q)
+        out.append((-width * cr * r1, width * (sr * r1 * sq - cr * cq * q1)))
+    if order >= 2:
+        r2, q2 = rr[1], qq[1]
+        out.append((width * (sr * r1 * r1 - cr * r2),
+                    width * (cr * r1 * r1 * sq + sr * r2 * sq + 2 * sr * r1 * cq * q1
+                             + cr * sq * q1 * q1 - cr * cq * q2)))
+    return tuple(out)
