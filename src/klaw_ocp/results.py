@@ -52,8 +52,11 @@ def hip_offsets(walk) -> list:
 
 def step_hip_offsets(body, step) -> list:
     """:func:`hip_offsets` of one step ([subphase]), in one call of the stance kinematics."""
-    offsets = stance_hips(body, np.vstack([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
-    return np.split(offsets, np.cumsum([len(sub.states) for sub in step.subphases])[:-1])
+    # its pieces as plain slices, not np.split's (the served step's table: each numpy wrapper's
+    # fixed cost is that function's time)
+    offsets = stance_hips(body, np.concatenate([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
+    ends = np.cumsum([len(sub.states) for sub in step.subphases]).tolist()
+    return [offsets[a:b] for a, b in zip([0, *ends[:-1]], ends)]
 
 
 def _step_hips(body, step, step_offsets: list | None = None) -> list:
@@ -154,12 +157,6 @@ def step_table(step, body, step_offsets: list | None = None) -> dict:
     """The rows of one step in :func:`walk_table`'s columns: a walk's table is its steps' tables
     one after the other (no row depends on a later step), so a run can write them as they come
     (``step_offsets``: its :func:`hip_offsets`, when the caller has them)."""
-    if step_offsets is None:
-        # step_hip_offsets' numbers, its np.split's pieces as plain slices (the served step's
-        # table: each numpy wrapper's fixed cost is this function's time)
-        offsets = stance_hips(body, np.concatenate([sub.states[:, :6] for sub in step.subphases]), np.zeros(2))[0]
-        ends = np.cumsum([len(sub.states) for sub in step.subphases]).tolist()
-        step_offsets = [offsets[a:b] for a, b in zip([0, *ends[:-1]], ends)]
     columns = _step_columns(step, _step_hips(body, step, step_offsets))
     columns["hip_y_ref"] = _step_hip_reference(step, body, columns["t"])
     # every column is a new array or a view of one made here (np.concatenate always makes one):

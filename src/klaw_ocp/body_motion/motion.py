@@ -85,21 +85,8 @@ class LegPlanes:
         hip = self.hips[side]
         return np.column_stack([hip[:, 0], np.hypot(hip[:, 1], hip[:, 2] - self.foot_z[side])])
 
-    def to_world(self, side: str, points: np.ndarray, rows=slice(None)) -> np.ndarray:
-        """In-plane points (n, 2) of the leg at ``rows`` of the samples -> world points (n, 3)."""
-        hip, z_foot = self.hips[side][rows], self.foot_z[side]
-        dz = hip[:, 2] - z_foot
-        v_leg = np.hypot(hip[:, 1], dz)
-        v = points[:, 1]
-        return np.column_stack([points[:, 0], v * hip[:, 1] / v_leg, z_foot + v * dz / v_leg])
-
-    def all_to_world(self, side: str, points: dict) -> dict:
-        """:meth:`to_world` of several in-plane point arrays (n, 2) at every sample, in one pass
-        (name -> world points (n, 3))."""
-        return dict(zip(points, self.stacked_to_world(side, np.stack(list(points.values())))))
-
     def stacked_to_world(self, side: str, p: np.ndarray) -> np.ndarray:
-        """:meth:`to_world` of in-plane points stacked (k, n, 2) at every sample: (k, n, 3)."""
+        """In-plane points of the leg stacked (k, n, 2), at every sample -> world points (k, n, 3)."""
         hip, z_foot = self.hips[side], self.foot_z[side]
         dz = hip[:, 2] - z_foot
         v_leg = np.hypot(hip[:, 1], dz)

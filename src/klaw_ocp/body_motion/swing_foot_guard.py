@@ -87,8 +87,13 @@ def _ground_window(body, theta6, ankle_y, shank) -> tuple:
 
 def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
     """:func:`ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
-    lowest, highest, fits, level = _ground_window(body, theta6, ankle_y, shank)
-    return np.where(fits, clamp(theta5, lowest, highest), level), theta6
+    return _clip_to(_ground_window(body, theta6, ankle_y, shank), theta5), theta6
+
+
+def _clip_to(window: tuple, theta5):
+    """``theta5`` clipped to a :func:`_ground_window` ``window`` (the level sole where none fits)."""
+    lowest, highest, fits, level = window
+    return np.where(fits, clamp(theta5, lowest, highest), level)
 
 
 def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
@@ -260,13 +265,13 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
 def _turned(body, on: _Grids, scheduled, theta6, ankle_y, shank):
     """The turn of the ground guard (rad) of the scheduled θ5 ``scheduled`` and θ6 ``theta6`` on
     every step's grid, concatenated in order."""
-    lowest, highest, fits, level = _ground_window(body, theta6, ankle_y, shank)    # (both clips' limits)
-    required = np.where(fits, clamp(scheduled, lowest, highest), level) - scheduled
+    window = _ground_window(body, theta6, ankle_y, shank)    # (both clips' limits)
+    required = _clip_to(window, scheduled) - scheduled
     turn = _smooth_turn(on, required)
     # the smooth turn lags where a large requirement falls off quickly (the schedule itself moving
     # towards the level sole), and so can overshoot into the other limit: the toe then goes down
     # where the heel needed the turn; clipped to both limits again, the clip smoothed too
-    back = np.where(fits, clamp(scheduled + turn, lowest, highest), level) - scheduled - turn
+    back = _clip_to(window, scheduled + turn) - scheduled - turn
     # (capped at the ends too: there the foot is the stance foot's, on the ground by construction)
     return turn + _smooth_turn(on, back)
 
