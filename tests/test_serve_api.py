@@ -3,8 +3,11 @@ ahead of the page, parameter changes, refusals that leave the walk going, a sess
 reproduced by `klaw-ocp run` byte for byte, the limits, sessions that end."""
 from __future__ import annotations
 
+import contextlib
 import json
 import time
+from collections import deque
+
 import pytest
 
 pytest.importorskip("starlette")
@@ -26,24 +29,49 @@ def app(**limits):
     return create_app(ExperimentConfig.from_mapping(walk), ServeLimits(**limits))
 
 
-def receive(ws, kind: str, skip=("accepted", "stopping")) -> dict:
-    """The next message of type ``kind`` (steps and the listed kinds passed over)."""
-    for _ in range(200):
-        message = json.loads(ws.receive_text())
-        if message["type"] == kind:
-            return message
-        assert message["type"] in ("step", "skeleton", *skip), message
-    raise AssertionError(f"no {kind} message")
+class Page:
+    """What a page does with the websocket: it reads every message as it comes and asks for the
+    next step when it shows one. A step that arrives while the page waits for another message
+    (a refusal, an acceptance, an export) is kept for showing, not lost: the server solves a step
+    only when asked, so a page that dropped one would never ask for the next and would wait
+    forever (how the order of a step and a refusal, which depends on the machine, once hung CI)."""
+
+    def __init__(self, ws):
+        self.ws, self.pending = ws, deque()
+
+    def send(self, message) -> None:
+        self.ws.send_text(message if isinstance(message, str) else json.dumps(message))
+
+    def receive(self, kind: str, skip=("accepted", "stopping")) -> dict:
+        """The next message of type ``kind``; steps that come first are kept for :meth:`walk`,
+        the listed kinds passed over."""
+        if kind == "step" and self.pending:
+            return self.pending.popleft()
+        for _ in range(200):
+            message = json.loads(self.ws.receive_text())
+            if message["type"] == kind:
+                return message
+            assert message["type"] in ("step", "skeleton", *skip), message
+            if message["type"] == "step":
+                self.pending.append(message)
+            elif message["type"] == "skeleton":      # a new walk: the old one's steps are dropped
+                self.pending.clear()
+        raise AssertionError(f"no {kind} message")
+
+    def walk(self, count: int) -> list:
+        """Show ``count`` steps, asking for the next one while showing one."""
+        steps = []
+        for _ in range(count):
+            step = self.receive("step")
+            self.send({"type": "need", "step": step["index"] + 1})
+            steps.append(step)
+        return steps
 
 
-def walk_steps(ws, count: int) -> list:
-    """Show ``count`` steps as a page does (it asks for the next one while showing one)."""
-    steps = []
-    for _ in range(count):
-        step = receive(ws, "step")
-        ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
-        steps.append(step)
-    return steps
+@contextlib.contextmanager
+def open_page(client):
+    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
+        yield Page(ws)
 
 
 @pytest.fixture
@@ -64,42 +92,42 @@ def test_the_page_and_its_three_js_are_served_from_the_package(client):
 
 
 def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        skeleton = receive(ws, "skeleton")
+    with open_page(client) as page:
+        skeleton = page.receive("skeleton")
         assert len(skeleton["joints"]) == 37
-        first = receive(ws, "step")
+        first = page.receive("step")
         points = first["frames"]["points"]
         assert first["index"] == 0 and first["planned"]["step"] == 2
         assert len(points) == len(first["frames"]["t"]) and len(points[0]) == 3 * (37 + len(skeleton["end_sites"]))
-        ws.send_text(json.dumps({"type": "need", "step": 5}))         # no further than the step after those sent
-        assert receive(ws, "step")["index"] == 1
-        ws.send_text(json.dumps({"type": "export"}))                   # the walk so far, while it walks
-        assert receive(ws, "export")["steps"] == 2
-        ws.send_text(json.dumps({"type": "need", "step": 2}))
-        assert receive(ws, "step")["index"] == 2
+        page.send({"type": "need", "step": 5})    # no further than the step after those sent
+        assert page.receive("step")["index"] == 1
+        page.send({"type": "export"})              # the walk so far, while it walks
+        assert page.receive("export")["steps"] == 2
+        page.send({"type": "need", "step": 2})
+        assert page.receive("step")["index"] == 2
 
 
 def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(client):
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 2)
-        ws.send_text(json.dumps({"type": "set", "values": {"speed": 30}}))
-        refused = receive(ws, "refused")
+    with open_page(client) as page:
+        page.walk(2)
+        page.send({"type": "set", "values": {"speed": 30}})
+        refused = page.receive("refused")
         assert refused["field"] == "walk.speed" and refused["message"].startswith("walk.speed: got 30")
-        ws.send_text(json.dumps({"type": "set", "values": {"speed": 3.0}}))
-        assert receive(ws, "accepted")["target"]["speed"] == 3.0
-        speeds = [s["speed"] for s in walk_steps(ws, 6)]
+        page.send({"type": "set", "values": {"speed": 3.0}})
+        assert page.receive("accepted")["target"]["speed"] == 3.0
+        speeds = [s["speed"] for s in page.walk(6)]
         assert speeds[-1] == pytest.approx(3.0) and all(abs(b - a) <= 1.0 + 1e-9 for a, b in zip(speeds, speeds[1:]))
 
 
 def test_a_determinant_changes_the_walk_from_a_later_step_without_a_new_walk(client):
     """A page's pelvic list and arm swing sliders change the walk on (#38 item 1: attributes before
     each step), the step message saying which ones it walks with; the walk is not restarted."""
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 2)
-        ws.send_text(json.dumps({"type": "set", "values": {"attributes.pelvic_list": 9, "attributes.arm_swing_amplitude": 25}}))
-        target = receive(ws, "accepted")["target"]
+    with open_page(client) as page:
+        page.walk(2)
+        page.send({"type": "set", "values": {"attributes.pelvic_list": 9, "attributes.arm_swing_amplitude": 25}})
+        target = page.receive("accepted")["target"]
         assert target["attributes"]["pelvic_list"] == 9.0 and "speed" not in target
-        steps = walk_steps(ws, 4)
+        steps = page.walk(4)
         assert [s["index"] for s in steps] == [2, 3, 4, 5]             # the same walk, going on
         lists = [s["attributes"]["pelvic_list"] for s in steps]
         assert lists[0] == 5.0 and lists[-1] == 9.0
@@ -117,33 +145,32 @@ def test_a_determinant_changes_the_walk_from_a_later_step_without_a_new_walk(cli
     ('{"type": "need", "step": -1}', "step"),
 ])
 def test_bad_messages_are_refused_in_one_line_and_the_walk_goes_on(client, text, field):
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 1)
-        ws.send_text(text)
-        refused = receive(ws, "refused")
+    with open_page(client) as page:
+        page.walk(1)
+        page.send(text)
+        refused = page.receive("refused")
         assert refused["field"] == field and "\n" not in refused["message"], refused
-        assert len(walk_steps(ws, 2)) == 2
+        assert len(page.walk(2)) == 2
 
 
 @pytest.mark.parametrize("stopped", [True, False], ids=["stopped at rest", "mid-walk"])
 def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, tmp_path, monkeypatch, stopped):
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 2)
-        ws.send_text(json.dumps({"type": "set", "values": {"speed": 4.0, "step_length": 0.7,
-                                                            "attributes.pelvic_rotation": 7}}))
-        walk_steps(ws, 2)
+    with open_page(client) as page:
+        page.walk(2)
+        page.send({"type": "set", "values": {"speed": 4.0, "step_length": 0.7, "attributes.pelvic_rotation": 7}})
+        page.walk(2)
         if stopped:
-            ws.send_text(json.dumps({"type": "stop"}))
-            while (step := receive(ws, "step", skip=("accepted", "stopping", "ended")))["closing"] is False:
-                ws.send_text(json.dumps({"type": "need", "step": step["index"] + 1}))
+            page.send({"type": "stop"})
+            while (step := page.receive("step", skip=("accepted", "stopping", "ended")))["closing"] is False:
+                page.send({"type": "need", "step": step["index"] + 1})
         else:
-            assert receive(ws, "step")["index"] == 4       # on the page; step 5 not asked for yet
-        ws.send_text(json.dumps({"type": "export"}))
-        exported = receive(ws, "export", skip=("accepted", "stopping", "ended"))
+            assert page.receive("step")["index"] == 4       # on the page; step 5 not asked for yet
+        page.send({"type": "export"})
+        exported = page.receive("export", skip=("accepted", "stopping", "ended"))
         if not stopped:     # the walk so far, and the walk goes on after it
             assert exported["steps"] == 5
-            ws.send_text(json.dumps({"type": "need", "step": 5}))
-            assert receive(ws, "step")["index"] == 5
+            page.send({"type": "need", "step": 5})
+            assert page.receive("step")["index"] == 5
     config = tmp_path / "session.yaml"
     config.write_text(exported["config"], encoding="utf-8")
     monkeypatch.chdir(tmp_path)
@@ -153,23 +180,23 @@ def test_a_session_exported_reproduces_with_klaw_ocp_run_byte_for_byte(client, t
 
 def test_a_step_that_does_not_converge_ends_its_walk_in_one_line_and_a_new_one_walks(client, fail_at_step):
     fail_at_step(3, "swing2", 1e-3)
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 2)                       # and asks for step 2, whose next step fails
-        failed = receive(ws, "failed")
+    with open_page(client) as page:
+        page.walk(2)                       # and asks for step 2, whose next step fails
+        failed = page.receive("failed")
         assert "swing2" in failed["message"] and "\n" not in failed["message"]
-        ws.send_text(json.dumps({"type": "start", "settings": {"walk.speed": 4.0}}))
-        assert receive(ws, "skeleton")["type"] == "skeleton"
-        assert receive(ws, "step")["index"] == 0
+        page.send({"type": "start", "settings": {"walk.speed": 4.0}})
+        assert page.receive("skeleton")["type"] == "skeleton"
+        assert page.receive("step")["index"] == 0
 
 
 def test_a_new_walk_with_other_settings_replaces_the_old_one(client):
-    with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-        walk_steps(ws, 2)
-        ws.send_text(json.dumps({"type": "start", "settings": {"body.height": 1.6, "attributes.arm_swing_amplitude": 30,
-                                                               "walk.start_from_rest": True, "walk.speed": 3.0}}))
-        skeleton = receive(ws, "skeleton")
+    with open_page(client) as page:
+        page.walk(2)
+        page.send({"type": "start", "settings": {"body.height": 1.6, "attributes.arm_swing_amplitude": 30,
+                                                 "walk.start_from_rest": True, "walk.speed": 3.0}})
+        skeleton = page.receive("skeleton")
         assert skeleton["height"] == 1.6 and skeleton["start_from_rest"] is True
-        assert receive(ws, "step")["index"] == 0
+        assert page.receive("step")["index"] == 0
 
 
 def test_a_foreign_origin_is_refused(client):
@@ -192,24 +219,24 @@ def test_origin_rules():
 def test_sessions_past_the_limit_are_told_so_and_the_first_ones_go_on():
     from starlette.websockets import WebSocketDisconnect
     with TestClient(app(max_sessions=1)) as c:
-        with c.websocket_connect("/walk", headers=ORIGIN) as first:
-            walk_steps(first, 1)
+        with open_page(c) as first:
+            first.walk(1)
             with pytest.raises(WebSocketDisconnect) as err:
                 with c.websocket_connect("/walk", headers=ORIGIN) as second:
                     second.receive_text()
             assert err.value.code == 1013 and "sessions" in err.value.reason
-            assert len(walk_steps(first, 1)) == 1
+            assert len(first.walk(1)) == 1
         assert c.get("/info").json()["sessions"] == 0
-        with c.websocket_connect("/walk", headers=ORIGIN) as again:       # the slot is free again
-            assert receive(again, "step")["index"] == 0
+        with open_page(c) as again:       # the slot is free again
+            assert again.receive("step")["index"] == 0
 
 
 def test_a_page_that_sends_too_fast_is_refused_and_keeps_walking():
     with TestClient(app(max_messages_per_s=1.0, burst=3)) as c:
-        with c.websocket_connect("/walk", headers=ORIGIN) as ws:
+        with open_page(c) as page:
             for _ in range(6):
-                ws.send_text('{"type": "need", "step": 0}')
-            refused = receive(ws, "refused")
+                page.send('{"type": "need", "step": 0}')
+            refused = page.receive("refused")
             assert refused["field"] == "message" and "messages a second" in refused["message"]
 
 
@@ -239,10 +266,10 @@ def test_closed_tabs_free_their_walks_at_once(client):
     import gc
     import time
     for k in range(6):
-        with client.websocket_connect("/walk", headers=ORIGIN) as ws:
-            receive(ws, "step")
+        with open_page(client) as page:
+            page.receive("step")
             if k % 2:       # closed with the next step being solved
-                ws.send_text(json.dumps({"type": "need", "step": 1}))
+                page.send({"type": "need", "step": 1})
     deadline = time.monotonic() + 10
     while True:             # a step being solved when its page closed finishes in its thread first
         gc.collect()
