@@ -79,7 +79,7 @@ def record_walk(mapping: dict, method: str) -> RecordedWalk:
 
     def spy(self, step, problem, remember=True):
         solution = original(self, step, problem, remember)
-        problems[(step, problem.spec.name)] = (problem, solution)
+        problems[(step, solution.name)] = (problem, solution)     # (a closing step's swing2 too)
         return solution
     StepController._solve = spy
     try:

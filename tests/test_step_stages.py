@@ -92,7 +92,7 @@ def test_the_swing_sees_the_stance_models_hip_acceleration(walks):
     for walk, solved in walks:
         body = walk.spec.body
         for _, problem, solution in solved:
-            name = problem.spec.name
+            name = solution.name          # (a closing step's swing2 too)
             if not name.startswith("swing"):
                 continue
             u = np.array([solution.parameters[k] for k in problem.spec.unknown_names])

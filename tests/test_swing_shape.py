@@ -35,7 +35,7 @@ def test_the_shape_averages_its_mean_and_falls_by_its_fall(duration, tau):
 
 def test_each_swing_subphase_has_as_many_unknowns_as_final_conditions():
     specs = swing_specs()
-    for name, nf in (("swing1", 2), ("swing2", 2), ("swing3", 1)):
+    for name, nf in (("swing1", 2), ("swing2", 2), ("swing2_closing", 4), ("swing3", 1)):
         spec = specs[name]
         assert spec.final.size1_out(0) == nf, name
         # plain shooting pairs every free unknown with its own condition (swing2's recovery
@@ -60,7 +60,7 @@ def test_the_thigh_is_at_its_peak_at_t1(walk):
         s1 = step.subphase("swing1")
         theta3, theta3d = s1.states[-1][6], s1.states[-1][8]
         # the heel-strike angle, or ahead of it where the swing leg needs it to clear the ground
-        # (control/swing_clearance.py: the first step from rest)
+        # (control/swing_clearance.py: the first step from rest), behind it in a closing step
         peak = step.plan.constraints.theta3 - math.radians(step.thigh_retraction_deg)
         assert theta3 == pytest.approx(peak, abs=1e-8), step.index
         assert abs(theta3d) <= RATE_TOL, step.index
@@ -81,10 +81,10 @@ def test_the_thigh_holds_in_swing2(walk):
     for step in walk.steps:
         s2 = step.subphase("swing2")
         theta3 = s2.states[:, 6]
-        retraction = math.radians(step.thigh_retraction_deg)
+        retraction = max(math.radians(step.thigh_retraction_deg), 0.0)
         # the recovery loop (§4.3) moves the held angle forward where the toe would touch the
-        # ground (a closing step's short swing)
-        target = step.plan.constraints.theta3 - retraction + s2.parameters["hip_actuator"]
+        # ground; a closing step's hold comes forward from behind onto the landing angle
+        target = step.plan.constraints.theta3 - retraction + s2.parameters.get("hip_actuator", 0.0)
         assert theta3.min() >= target - 1e-6, step.index               # never past it forward
         # the drift back is measured from where swing1 left the thigh: with the recovery
         # actuator (a first step from rest) the held angle itself moved forward

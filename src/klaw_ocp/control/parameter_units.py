@@ -4,7 +4,8 @@ torque shapes), so that results, comparisons and plots can name them without kno
 Stance (control/stance_law.py): the F_theta1 step magnitude, the pa offset of the late extension,
 the closing step's braking level and, in the tracking formulation, the pa profile's knots.
 Swing (control/swing_spec.py): swing1's F_theta3 fall and mean, swing2's F_theta4 fall and mean and the
-recovery loop's hip actuator (a shift of the held thigh angle), swing3's constant hip moment.
+recovery loop's hip actuator (a shift of the held thigh angle), in a closing step instead the
+coefficients a, b of the hip torque a s + b s² added to the hold, swing3's constant hip moment.
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ PARAMETER_UNITS: dict[str, str] = {
     "F_theta4_fall": "N m",
     "F_theta4_mean": "N m",
     "hip_actuator": "rad",
+    "F_theta3_linear": "N m",
+    "F_theta3_quadratic": "N m",
     "F_theta3_moment": "N m",
 }
 

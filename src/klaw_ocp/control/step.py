@@ -30,8 +30,8 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_clearance import clearance_retraction
-from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support, node_at,
-                          plan_curve_p, stance_leg_rules, step_pelvis, swing_context, with_curve_p)
+from .step_stages import (CLOSING_APPROACH_DEG, CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support,
+                          node_at, plan_curve_p, stance_leg_rules, step_pelvis, swing_context, with_curve_p)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -69,9 +69,9 @@ GRADED_STANCE_STRETCH = 4 / 3
 
 
 def prepare_kernels(solver, lock_rule: str = choices.DEFAULT_LOCK_RULE) -> None:
-    """Load, or compile, the kernels of the four subphases a walk with this solver and lock rule
-    solves: the first walk on a machine compiles them all at once, on every core."""
-    solver.prepare([stance_spec(lock_rule, False), *swing_specs(lock_rule).values()])
+    """Load, or compile, the kernels a walk with this solver and lock rule solves, at once on every core
+    (a machine's first walk); a closing step's swing2 (most walks never stop) when a walk first stops."""
+    solver.prepare([stance_spec(lock_rule, False), *(s for s in swing_specs(lock_rule).values() if not s.subphase)])
 
 
 def stance_grid(t_step: float, n: int, breakpoints) -> np.ndarray:
@@ -162,7 +162,7 @@ class StepResult:
     pelvis: PelvisSchedule
     #: how far ahead of its heel-strike angle the thigh peaked at t1 (deg): the attribute
     #: ``terminal_swing_retraction``, or more where the swing leg needed it to clear the ground
-    #: (control/swing_clearance.py)
+    #: (control/swing_clearance.py); a closing step's is negative (behind: CLOSING_APPROACH_DEG)
     thigh_retraction_deg: float = 0.0
 
     def subphase(self, name: str) -> SubphaseSolution:
@@ -218,6 +218,7 @@ class StepController:
         hip, knee = SWING1_SCALE_REL * body.m1 * body.g * body.l1, SWING2_KNEE_SCALE_REL * body.m4 * body.g * body.l4
         self.scales = {"swing1": np.array([hip, hip]),          # F_theta3's fall and mean
                        "swing2": np.array([knee, SWING2_RECOVERY_SCALE, knee]),
+                       "swing2_closing": np.array([knee, hip, knee, hip]),
                        "swing3": np.array([SWING3_SCALE_REL * body.m1 * body.g * body.l1])}
 
     # -- contexts ------------------------------------------------------------------------------
@@ -237,7 +238,7 @@ class StepController:
         problem, the node states to start the next step from."""
         solution = self.solver.solve(problem)
         if not solution.success:
-            raise ConvergenceError(step, problem.spec.name, solution.residual, solution.message,
+            raise ConvergenceError(step, problem.spec.solution_name, solution.residual, solution.message,
                                    iterations=solution.iterations, path_min=solution.path_min, nlp=solution.nlp,
                                    finite=bool(np.all(np.isfinite(solution.states))),
                                    max_iterations=getattr(self.solver, "max_iterations", None))
@@ -308,11 +309,11 @@ class StepController:
                 a.with_overrides({"terminal_swing_retraction": retraction_deg})
             curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
             c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
-            return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
+            return (self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve,
+                                      at_rest), pelvis, curve, c)
         # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the
-        # ankle would pass lower than l9 (control/swing_clearance.py); not in a closing step, whose
-        # thigh lands vertical under a hip still rising: a thigh ahead lifts its ankle little there
-        (swings, _, curve, c), retraction = (swings_with(a.terminal_swing_retraction), a.terminal_swing_retraction) \
+        # ankle would pass lower than l9 (control/swing_clearance.py); a closing step's comes in from behind (thigh_peak)
+        (swings, _, curve, c), retraction = (swings_with(a.terminal_swing_retraction), -CLOSING_APPROACH_DEG) \
             if at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction,
                                                  self.retraction_hint)
         self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
@@ -329,7 +330,7 @@ class StepController:
                           stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis, thigh_retraction_deg=retraction)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
-                     stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:
+                     stance_events, t_toe_off: float, curve: CurveP, closing: bool = False) -> list[SubphaseSolution]:
         """Swing1 from the toe-off posture, swing2 from swing1's end (the knee's rate from swing1's
         kinematic constraint), swing3 from the knee locked at t2 (eq. 5). ``stance_events``: the
         stance's lock events, None in the closing step (whose stance has none)."""
@@ -352,17 +353,21 @@ class StepController:
         c2 = lock_context(c, mode2)
         u1 = [s1.parameters[k] for k in specs["swing1"].unknown_names]
         th4d = float(evaluate(specs["swing1"].rhs, x_end1, t1, u1, c2)[0][7])
-        guess2 = self._guess("swing2", 3)
-        guess2[1] = 0.0
-        s2 = self._solve(index, SubphaseProblem(
-            specs["swing2"], np.concatenate([x_end1, [th4d]]), time_grid(t1, t2, self.n, [t.t_theta1_off]), c2,
-            guess2, self.scales["swing2"], fixed=(False, True, False), path_lower=np.array([a.toe_clearance, -np.inf]),
-            recovery_step=np.array([0.0, SWING2_RECOVERY_STEP, 0.0]), mode=mode2))
+        grid2, x02 = time_grid(t1, t2, self.n, [t.t_theta1_off]), np.concatenate([x_end1, [th4d]])
+        if closing:   # no recovery: the foot comes down in place (swing_spec.py, swing2_closing)
+            s2 = self._solve(index, SubphaseProblem(specs["swing2_closing"], x02, grid2, c2, self._guess(
+                "swing2_closing", 4), self.scales["swing2_closing"], mode=mode2))
+        else:
+            guess2 = self._guess("swing2", 3)
+            guess2[1] = 0.0
+            s2 = self._solve(index, SubphaseProblem(
+                specs["swing2"], x02, grid2, c2, guess2, self.scales["swing2"], fixed=(False, True, False), mode=mode2,
+                path_lower=np.array([a.toe_clearance, -np.inf]), recovery_step=np.array([0.0, SWING2_RECOVERY_STEP, 0.0])))
         x_end2 = s2.final_state
         knee = knee_lock_map(self.body, x_end2[6:10], np.zeros(2), self.lock_rule)   # the knee locks at t2
         mode3 = lock_mode(s2.events, mode=mode2)
         c3 = lock_context(c, mode3)        # with swing2's recovery shift, fading on in swing3
-        c3[_HOLD_OFFSET] = s2.parameters["hip_actuator"]
+        c3[_HOLD_OFFSET] = s2.parameters.get("hip_actuator", 0.0)
         s3 = self._solve(index, SubphaseProblem(
             specs["swing3"], np.concatenate([x_end2[:6], [x_end2[6], knee[2]]]),
             time_grid(t2, t.t_step, self.n, [t.t_theta1_off]), c3, self._guess("swing3", 1),
@@ -390,7 +395,6 @@ class StepController:
 
     def heel_clearance_min(self, swing3: SubphaseSolution, c: np.ndarray) -> float:
         """The heel's lowest height over swing3 before it strikes (all nodes in one call)."""
-        nodes = len(swing3.t) - 1
-        path = self.swing_specs["swing3"].path
-        heel = evaluate(mapped(path, nodes), swing3.states[:-1], swing3.t[:-1], swing3.parameters["F_theta3_moment"], c)[0]
+        heel = evaluate(mapped(self.swing_specs["swing3"].path, len(swing3.t) - 1), swing3.states[:-1], swing3.t[:-1],
+                        swing3.parameters["F_theta3_moment"], c)[0]
         return float(heel.min()) if heel.size else 0.0

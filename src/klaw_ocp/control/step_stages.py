@@ -62,6 +62,15 @@ CURVE_P_PEAK_MARGIN_REL = 0.01
 #: ground and the ground guard held the ankle at its toe-off angle). Proportional to D, so a
 #: closing step's short swing keeps the small peak it converges with.
 CURVE_P_PEAK_MARGIN_TRAVEL = 0.07
+#: A walk's closing step puts its foot down beside the stance foot while the body comes to rest
+#: over that foot: the stance leg still leans, its hip still below standing height (by l1 (1 - cos
+#: θ1)), and a swing leg as straight and vertical would have its ankle below l9. So its thigh peaks
+#: this far (deg) behind its vertical landing angle at t1 and comes forward onto it (the hold's
+#: reference, swing_law.thigh_reference), leaning as the stance leg does, the other way, and both
+#: come upright together (the lowest ankle -0.9 mm at 5 km/h with the thigh vertical from t1 on;
+#: the closing swing's peak hip torque at 0.5/1/5/8 km/h 0.29/0.76/1.34/1.66 N m/kg with 3°,
+#: 0.33/0.82/1.34/1.81 with 2°, 0.26/0.70/1.44/1.54 with 4°)
+CLOSING_APPROACH_DEG = 3.0
 #: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
 #: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
 CURVE_P_BAUMGARTE = 50.0
@@ -216,7 +225,10 @@ def _reach_of(body: Body, knee: float) -> float:
 
 def thigh_peak(attrs, constraints) -> float:
     """θ3 at t1, where swing1 brings the thigh to rest and swing2 holds it: ahead of its
-    heel-strike angle (eq. 3; θ3 < 0 ahead of the hip) by ``terminal_swing_retraction``."""
+    heel-strike angle (eq. 3; θ3 < 0 ahead of the hip) by ``terminal_swing_retraction``; in a
+    walk's closing step (sl = 0) behind it by CLOSING_APPROACH_DEG."""
+    if constraints.step_length == 0:
+        return constraints.theta3 + math.radians(CLOSING_APPROACH_DEG)
     return constraints.theta3 - math.radians(attrs.terminal_swing_retraction)
 
 

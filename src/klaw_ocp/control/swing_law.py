@@ -20,7 +20,9 @@ States (stance part first, see :mod:`.stance_law`):
   thigh at its peak (retracting towards the heel-strike angle late in the swing where the peak is
   ahead of it: :func:`thigh_reference`), shifted by the recovery actuator; F_theta4 a decaying exponential
   about its mean, two unknowns, so that the knee reaches full extension at t2 at rest and
-  swing3's lock (eq. 5) is not an impact.
+  swing3's lock (eq. 5) is not an impact. In a walk's closing step (:func:`closing_swing2_torques`)
+  the recovery actuator gives way to a torque a s + b s² added to the hold, two more unknowns,
+  so that the thigh also ends swing2 on its reference and moving with it.
 - swing3: ``[..6.., theta3, theta3d]``, knee locked at full extension (theta4 = 0). F_theta3 is the
   spring-damper about the thigh's reference (the heel-strike angle at heel strike) plus a small constant moment that brings the heel down
   in time.
@@ -163,7 +165,9 @@ def thigh_reference(t, c, shift=0):
     a maximum" at t1; people's thighs retract in terminal swing). The shift fades out with the
     retraction: held to t2 and dropped there, it was retracted by swing3's constant moment alone
     (a closing step's 4.2 N m/kg at 5 km/h). Where the peak is the heel-strike angle and nothing
-    shifts it, the target is that angle throughout, the paper's hold."""
+    shifts it, the target is that angle throughout, the paper's hold. A closing step's peak is
+    behind its vertical landing angle (step_stages.CLOSING_APPROACH_DEG): the same curve brings
+    the thigh forward onto it."""
     n = names(c)
     t_r = n.swing2_start + RETRACTION_START_SHARE * (n.swing_end_time - n.swing2_start)
     span = n.swing_end_time - t_r
@@ -187,16 +191,50 @@ def swing2_torques(x, t, u, c):
     return _hold(x[6], x[8], t, c, u[1]), decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 
-def swing2_rhs(x, t, u, c):
+def swing2_rhs(x, t, u, c, torques=swing2_torques):
     stance_rates, _, hip, hip_vel, hip_acc = stance_part(x[0:6], t, c)
-    f3, f4 = swing2_torques(x, t, u, c)
+    f3, f4 = torques(x, t, u, c)
     qdd = swing_accelerations_sx(x[6:8], x[8:10], ca.vertcat(f3, f4), hip_acc, body_vector(c), 0)
     return ca.vertcat(stance_rates, x[8:10], qdd)
 
 
-def swing2_forces(x, t, u, c):
+def swing2_forces(x, t, u, c, torques=swing2_torques):
     _, stance_f, *_ = stance_part(x[0:6], t, c)
-    return ca.vertcat(stance_f, *swing2_torques(x, t, u, c))
+    return ca.vertcat(stance_f, *torques(x, t, u, c))
+
+
+def closing_swing2_torques(x, t, u, c):
+    """A closing step's swing2, u = (F_theta4's fall, a, F_theta4's mean, b): F_theta3 is the hold
+    about :func:`thigh_reference` plus a s + b s², s = (t - t1)/(t2 - t1) (none at t1, where
+    swing1's torque hands over), F_theta4 as in :func:`swing2_torques`.
+
+    Why: in the last step the foot lands beside the stance foot with the leg all but vertical, and
+    as the knee extends into full extension at rest at t2 its braking throws the thigh forward
+    (gravity does not brake the shank past the vertical, as it does in a step that lands ahead).
+    The soft hold let the thigh run 2-3° past its target at up to 70 °/s, and swing3's one
+    constant moment had to pull it back in 15 % of the swing: 2.3 N m/kg at 5 km/h, 4.2 at 9 km/h.
+    With the thigh on its reference and moving with it at t2 (:func:`closing_swing2_final`),
+    swing3's moment has next to nothing left to do."""
+    n = names(c)
+    target, target_rate = thigh_reference(t, c)
+    s = (t - n.swing2_start) / (n.foot_t2 - n.swing2_start)
+    f3 = spring_damper(x[6], x[8] - target_rate, n.k_h, n.d_h, target) + s * (u[1] + u[3] * s)
+    return f3, decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
+
+
+def closing_swing2_rhs(x, t, u, c):
+    return swing2_rhs(x, t, u, c, closing_swing2_torques)
+
+
+def closing_swing2_forces(x, t, u, c):
+    return swing2_forces(x, t, u, c, closing_swing2_torques)
+
+
+def closing_swing2_final(x, c):
+    """A closing step's swing2 ends with the knee straight and at rest (as every swing2) and the
+    thigh on its reference at t2, moving with it."""
+    target, target_rate = thigh_reference(names(c).foot_t2, c)
+    return ca.vertcat(x[7], x[9], x[6] - target, x[8] - target_rate)
 
 
 def swing2_clearance(x, t, u, c):

@@ -10,6 +10,11 @@
   functions: toe height, kept above the toe-clearance attribute, and
   heel height, reported only (no lower bound: the straight leg of short steps cannot keep the
   scheduled heel up, docs/paper-map.md; the body's foot is lifted instead, body_motion/swing_foot_guard.py).
+- ``swing2_closing``: a walk's closing step's swing2, whose leg comes down all but vertical
+  beside the stance leg: the recovery actuator's place is taken by a torque a s + b s² added to
+  the hold (two unknowns), and the thigh ends on its reference at t2, moving with it (two more
+  final conditions), so that swing3 does not have to pull back a thigh the knee's braking threw
+  forward. No toe-clearance bound: the foot lands in place, where the body's ground guard shows it.
 - ``swing3`` (to 100 %): unknown constant hip moment; theta3 reaches its eq. 3 value exactly at
   t_swing, where the heel lands on the ground (eq. 3 geometry). Path function: the heel's
   height (reported as the step's heel clearance, not constrained: the one unknown is fixed by
@@ -32,10 +37,13 @@ SWING3_PATH = ("heel_height",)
 SWING1_UNKNOWNS = ("F_theta3_fall", "F_theta3_mean")
 #: the recovery actuator stays at index 1 (held fixed unless the toe would touch the ground)
 SWING2_UNKNOWNS = ("F_theta4_fall", "hip_actuator", "F_theta4_mean")
+#: a walk's closing step: the actuator's place taken by the torque a s + b s² added to the hold
+#: (swing_law.closing_swing2_torques), with b last
+CLOSING_SWING2_UNKNOWNS = ("F_theta4_fall", "F_theta3_linear", "F_theta4_mean", "F_theta3_quadratic")
 
 
 def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), lock_rule=choices.DEFAULT_LOCK_RULE,
-          pairing=((0, 0),)):
+          pairing=((0, 0),), subphase=None):
     x, t = ca.SX.sym("x", len(state)), ca.SX.sym("t")
     u, c = ca.SX.sym("u", len(unknowns)), ca.SX.sym("c", _NC)
     args = [x, t, u, c]
@@ -52,6 +60,7 @@ def _spec(name, state, unknowns, rhs, forces, final, path=None, path_names=(), l
         pairing=pairing,
         # the stance the swing re-simulates (assumption 4) must stay a walk's stance
         plausible=ca.Function(f"{name}_plausible", [x, c], [stance_plausible(x[:6], c[: len(STANCE_CONTEXT)])]),
+        subphase=subphase,
     )
 
 
@@ -70,6 +79,9 @@ def swing_specs(lock_rule: str = choices.DEFAULT_LOCK_RULE) -> dict:
         "swing2": _spec("swing2", law.SWING2_STATE, SWING2_UNKNOWNS, law.swing2_rhs, law.swing2_forces,
                         lambda x, c: ca.vertcat(x[7], x[9]), law.swing2_clearance, SWING2_PATH, lock_rule,
                         pairing=((2, 1), (0, 0))),
+        "swing2_closing": _spec("swing2_closing", law.SWING2_STATE, CLOSING_SWING2_UNKNOWNS, law.closing_swing2_rhs,
+                                law.closing_swing2_forces, law.closing_swing2_final, law.swing2_clearance,
+                                SWING2_PATH, lock_rule, pairing=((2, 1), (0, 0), (1, 2), (3, 3)), subphase="swing2"),
         "swing3": _spec("swing3", law.SWING3_STATE, ("F_theta3_moment",), law.swing3_rhs,
                         law.swing3_forces, theta3_error, law.swing3_clearance, SWING3_PATH, lock_rule),
     }

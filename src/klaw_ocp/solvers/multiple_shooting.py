@@ -201,7 +201,7 @@ class MultipleShootingSolver:
               and np.isfinite(states).all() and plausible)
         msg = message or ("" if ok else f"residual {residual:.3g} (final conditions and continuity)"
                           + ("" if plausible else ", implausible motion (a root far from any walk)"))
-        return SubphaseSolution(spec.name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
+        return SubphaseSolution(spec.solution_name, self.name, dict(zip(spec.unknown_names, map(float, u))), pb.grid.copy(),
                                 states, forces, residual, iterations, bool(ok),
                                 time.perf_counter() - call.wall0 - call.build_s, msg, path_min, nlp=nlp,
                                 fallbacks=list(call.fallbacks), build_s=call.build_s)

@@ -376,7 +376,7 @@ class PlainShootingSolver:
                              + ("" if plausible else ", implausible motion (a root far from any walk)"))
         if recovery:
             msg = (msg + "; " if msg else "") + f"recovery loop: {recovery} increments"
-        return SubphaseSolution(pb.spec.name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
+        return SubphaseSolution(pb.spec.solution_name, self.name, dict(zip(pb.spec.unknown_names, map(float, u))),
                                 times, states, forces, res, shots, bool(ok), time.perf_counter() - wall0,
                                 msg if not ok or recovery else "", path_min, log, choices.BISECTION_SECANT,
                                 fallbacks=list(self._fallbacks))

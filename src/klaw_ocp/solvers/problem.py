@@ -73,6 +73,13 @@ class SubphaseSpec:
     #: (x, c) -> margins, all >= 0 on a physically meaningful state: a trajectory that leaves them
     #: is not a solution, whatever its residual (Newton can converge to a leg metres long)
     plausible: Optional[ca.Function] = None
+    #: the subphase its solutions are named after, where it is one of two forms of a subphase (a
+    #: closing step's swing2): None, its own name (which names its compiled kernels)
+    subphase: Optional[str] = None
+
+    @property
+    def solution_name(self) -> str:
+        return self.subphase or self.name
 
     def __hash__(self) -> int:
         # the dataclass's hash of every field, computed once: the solvers look their kernels and
