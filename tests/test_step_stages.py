@@ -39,10 +39,14 @@ def walks(request):
 def test_curve_p_peaks_at_swing_peak_position_of_its_travel(walks):
     """§4.3's five conditions, with C = swing_peak_position D: y(0) = a0, y(C) = a_max, y'(C) = 0,
     y(D) = a_min, and y'(D) the end slope that has the knee extending at t1 (the paper's 0; ours,
-    issue #36: docs/paper-map.md), on every step of the walk."""
+    issue #36: docs/paper-map.md), on every step of the walk; a closing step's C at most
+    CLOSING_CURVE_P_PEAK D (control/step_stages.py)."""
+    from klaw_ocp.control.step_stages import CLOSING_CURVE_P_PEAK
     for walk, _ in walks:
-        fraction = walk.spec.attributes.swing_peak_position
         for step in walk.steps:
+            fraction = walk.spec.attributes.swing_peak_position
+            if step.plan.constraints.step_length == 0:
+                fraction = min(fraction, CLOSING_CURVE_P_PEAK)
             p = step.curve_p
             poly = np.poly1d(p["coefficients"])
             assert p["C"] == pytest.approx(fraction * p["D"], rel=1e-12), step.index

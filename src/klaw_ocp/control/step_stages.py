@@ -67,10 +67,20 @@ CURVE_P_PEAK_MARGIN_TRAVEL = 0.07
 #: θ1)), and a swing leg as straight and vertical would have its ankle below l9. So its thigh peaks
 #: this far (deg) behind its vertical landing angle at t1 and comes forward onto it (the hold's
 #: reference, swing_law.thigh_reference), leaning as the stance leg does, the other way, and both
-#: come upright together (the lowest ankle -0.9 mm at 5 km/h with the thigh vertical from t1 on;
-#: the closing swing's peak hip torque at 0.5/1/5/8 km/h 0.29/0.76/1.34/1.66 N m/kg with 3°,
-#: 0.33/0.82/1.34/1.81 with 2°, 0.26/0.70/1.44/1.54 with 4°)
-CLOSING_APPROACH_DEG = 3.0
+#: come upright together (the lowest ankle -0.9 mm at 5 km/h with the thigh vertical from t1 on).
+#: Closing steps of the envelope grid (0.5-8 km/h, 1.5-2.0 m), largest peak swing hip torque and
+#: lowest ankle: 1.99 N m/kg, -0.66 mm at 2.5°; 1.90, -0.34 at 3°; 1.93, -0.04 at 4°; 2.08, -0.03 at 5°
+CLOSING_APPROACH_DEG = 4.0
+#: ... and its curve P peaks at most this fraction of D from toe-off (the attribute
+#: ``swing_peak_position``, 0.3, elsewhere). Its ankle comes down from the toe-off height (the heel
+#: raised) to its t1 height over a short travel; with the peak at 0.3 D the descent's steepest
+#: slope met the direction the extending knee moves the ankle (the shank 30-40° behind vertical),
+#: where the knee cannot keep the ankle on the curve (∂g/∂θ4 down to 0.012): swing1 lost the curve
+#: by 3 mm and handed swing2 a knee rate anywhere in −72 to −722 °/s, and some closing steps of
+#: tall bodies at 3.5-4.5 km/h peaked at 2.3-2.6 N m/kg of hip torque. Spread over 0.8 D the
+#: descent stays clear of it: on the envelope grid's closing steps ∂g/∂θ4 ≥ 0.05 and the ankle on
+#: the curve to 2e-5 mm (was 0.0075 and up to 3.5 mm off); 0.15 D failed to converge in some steps.
+CLOSING_CURVE_P_PEAK = 0.2
 #: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
 #: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
 CURVE_P_BAUMGARTE = 50.0
@@ -248,7 +258,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
     d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
     a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                 max(a0, a_min) + max(CURVE_P_PEAK_MARGIN_REL * b.l1, CURVE_P_PEAK_MARGIN_TRAVEL * d_travel))
-    peak = a.swing_peak_position * d_travel
+    peak = (min(a.swing_peak_position, CLOSING_CURVE_P_PEAK) if con.step_length == 0 else a.swing_peak_position) * d_travel
     knee_t1_angle = shank_t1 - thigh_t1
     knee_rate = -a.knee_rate_at_t1 * knee_t1_angle / (t2 - t1)
     end_slope = end_slope_for_knee_rate(b, shank_t1, hip_vel_t1, knee_rate)
