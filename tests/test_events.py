@@ -107,3 +107,40 @@ def test_a_lock_between_two_nodes_is_found(slow_stance):
             # grid is graded: control/step.py's stance_grid)
             k = int(np.searchsorted(pb.grid, dense)) - 1
             assert found == pytest.approx(dense, abs=1.5 * (pb.grid[k + 1] - pb.grid[k]) / 256), dF
+
+
+class _Line:
+    """Kernels of a one-state system x(t0 + s) = x0 + s whose event value is g(x)."""
+
+    def __init__(self, g):
+        self.g = g
+
+    def step(self, x0, t0, s, u, c):
+        return [np.asarray(x0, float) + s]
+
+    def events(self, x, t, u, c):
+        return [np.array([self.g(float(x[0]))])]
+
+
+def test_the_event_time_is_located_where_one_end_is_nearly_on_the_surface():
+    """Regula falsi keeps the end whose value is tiny and creeps from it (g = s^4 - 1e-8 from
+    s = 0: 60 steps left it far from the root); with the Illinois rule the crossing is found."""
+    from klaw_ocp.solvers.events import EventIntegrator
+    g = lambda s: s ** 4 - 1e-8
+    h = EventIntegrator(4)._locate(_Line(g), 0, np.zeros(1), 0.0, 0.0, 1.0, g(0.0), g(1.0), None, None)
+    assert h == pytest.approx(0.01, abs=1e-9) and abs(g(h)) < 1e-12
+
+
+def test_a_slow_walk_whose_leg_reaches_l1_and_dips_back_converges_in_plain_shooting():
+    """1.04 km/h, 1.72 m, 73.2 kg, a walking start: the leg reaches l1 at a node and dips back
+    before it grows past it; the lock was located 28 ms late, 0.085 mm past l1, and the stance's
+    lock rule failed at that sample (found by random walks beyond the acceptance grid)."""
+    from klaw_ocp.walk import simulate_walk
+    walk = simulate_walk({"name": "slow", "body": {"height": 1.72, "mass": 73.2},
+                          "walk": {"speed": 1.04, "steps": 2}, "solver": {"method": "plain-shooting"}})
+    assert walk.status == "ok"
+    from klaw_ocp.control.stance_spec import lock_rule_nodes
+    l1 = walk.spec.body.l1
+    for step in walk.steps:
+        states = step.subphase("stance").states
+        assert np.all(states[lock_rule_nodes(states, l1), 0] <= l1 + 1e-9), step.index

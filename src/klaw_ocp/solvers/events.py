@@ -230,8 +230,14 @@ class EventIntegrator:
         return times, np.array([np.ravel(g0), *map(np.ravel, inner), np.ravel(g1)])
 
     def _locate(self, kernels, e, x0, t0, a, b, ga, gb, u, c):
-        """The time after t0 in [a, b] (ga, gb of opposite signs there) where event e is zero."""
-        for _ in range(60):
+        """The time after t0 in [a, b] (ga, gb of opposite signs there) where event e is zero: the
+        secant method kept in its bracket (regula falsi) with the Illinois rule, which halves the
+        value kept at an end the bracket keeps twice. Plain regula falsi stalls where one end's
+        value is tiny against the other's (a leg that reaches l1 and dips back before it grows past
+        it, in slow walks): it crept from that end by 0.3 % of the interval a step and, after 60,
+        returned a time 28 ms late, the leg locked 0.085 mm past l1 (1 km/h, 1.72 m, 73 kg)."""
+        kept = 0   # which end the last step kept: -1 a, +1 b
+        for _ in range(100):
             with np.errstate(invalid="ignore", divide="ignore"):   # a NaN trial falls back to bisection
                 m = b - gb * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
             if not a < m < b:
@@ -241,6 +247,12 @@ class EventIntegrator:
                 return m
             if np.sign(gm) * np.sign(ga) < 0:     # (signs: a diverging trial's gm * ga overflows)
                 b, gb = m, gm
+                if kept == -1:
+                    ga *= 0.5
+                kept = -1
             else:
                 a, ga = m, gm
+                if kept == 1:
+                    gb *= 0.5
+                kept = 1
         return 0.5 * (a + b)
