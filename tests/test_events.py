@@ -128,7 +128,8 @@ def test_the_event_time_is_located_where_one_end_is_nearly_on_the_surface():
     from klaw_ocp.solvers.events import EventIntegrator
     g = lambda s: s ** 4 - 1e-8
     h = EventIntegrator(4)._locate(_Line(g), 0, np.zeros(1), 0.0, 0.0, 1.0, g(0.0), g(1.0), None, None)
-    assert h == pytest.approx(0.01, abs=1e-9) and abs(g(h)) < 1e-12
+    # (it stops where |g| < 1e-13: g' = 4e-6 there, so within 3e-8 of the root)
+    assert h == pytest.approx(0.01, abs=1e-7) and abs(g(h)) < 1e-12
 
 
 def test_a_slow_walk_whose_leg_reaches_l1_and_dips_back_converges_in_plain_shooting():
