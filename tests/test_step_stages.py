@@ -45,7 +45,7 @@ def test_curve_p_peaks_at_swing_peak_position_of_its_travel(walks):
     for walk, _ in walks:
         for step in walk.steps:
             fraction = walk.spec.attributes.swing_peak_position
-            if step.plan.constraints.step_length == 0:
+            if step.plan.constraints.closing:
                 fraction = min(fraction, CLOSING_CURVE_P_PEAK)
             p = step.curve_p
             poly = np.poly1d(p["coefficients"])

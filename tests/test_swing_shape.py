@@ -66,7 +66,7 @@ def test_the_thigh_is_at_its_peak_at_t1(walk):
         assert abs(theta3d) <= RATE_TOL, step.index
         # ... its peak: the thigh swung forward to it (theta3 < 0 ahead of the hip) from behind; a
         # closing step's, which stops 4° behind vertical, passes it by 0.002° before t1
-        closing = step.plan.constraints.step_length == 0
+        closing = step.plan.constraints.closing
         assert s1.states[0][6] > s1.states[-2][6] > theta3 - (1e-4 if closing else 0.0), step.index
 
 

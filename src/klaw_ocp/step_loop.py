@@ -122,7 +122,7 @@ def _next_input(spec, plan, result: StepResult, next_plan) -> StepInput | None:
                              hip_shift=np.array([con.hip_shift, 0.0]))
     y_start = con.hip_y - b.l9
     y_end = next_plan.constraints.hip_y - b.l9
-    excursion = 0.0 if next_plan.constraints.step_length == 0 else _excursion(b, spec.attributes, y_start, y_end)
+    excursion = 0.0 if next_plan.constraints.closing else _excursion(b, spec.attributes, y_start, y_end)
     # the next pelvis turns on from the rotation this one ended with, the one eq. 3 split this
     # step by (con.hip_shift = l0 sin of it; kinematics/pelvis.py)
     return StepInput(x_post, con.next_ankle_x, con.ankle_x, y_start, excursion, hind_foot=result.stance_foot,

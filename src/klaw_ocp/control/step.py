@@ -30,8 +30,8 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_clearance import clearance_retraction
-from .step_stages import (CLOSING_APPROACH_DEG, CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support,
-                          node_at, plan_curve_p, stance_leg_rules, step_pelvis, swing_context, with_curve_p)
+from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support, node_at, plan_curve_p,
+                          stance_leg_rules, step_pelvis, swing_context, thigh_peak, with_curve_p)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 
@@ -162,7 +162,7 @@ class StepResult:
     pelvis: PelvisSchedule
     #: how far ahead of its heel-strike angle the thigh peaked at t1 (deg): the attribute
     #: ``terminal_swing_retraction``, or more where the swing leg needed it to clear the ground
-    #: (control/swing_clearance.py); a closing step's is negative (behind: CLOSING_APPROACH_DEG)
+    #: (control/swing_clearance.py); a closing step's is negative (behind: step_stages.thigh_peak)
     thigh_retraction_deg: float = 0.0
 
     def subphase(self, name: str) -> SubphaseSolution:
@@ -309,13 +309,12 @@ class StepController:
                 a.with_overrides({"terminal_swing_retraction": retraction_deg})
             curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
             c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
-            return (self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve,
-                                      at_rest), pelvis, curve, c)
-        # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the
-        # ankle would pass lower than l9 (control/swing_clearance.py); a closing step's comes in from behind (thigh_peak)
-        (swings, _, curve, c), retraction = (swings_with(a.terminal_swing_retraction), -CLOSING_APPROACH_DEG) \
-            if at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction,
-                                                 self.retraction_hint)
+            return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
+        # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the ankle would
+        # pass lower than l9 (control/swing_clearance.py); a closing step's thigh comes in from behind (thigh_peak)
+        (swings, _, curve, c), retraction = (
+            (swings_with(a.terminal_swing_retraction), math.degrees(plan.constraints.theta3 - thigh_peak(a, plan.constraints)))
+            if at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction, self.retraction_hint))
         self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],
@@ -330,7 +329,7 @@ class StepController:
                           stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis, thigh_retraction_deg=retraction)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
-                     stance_events, t_toe_off: float, curve: CurveP, closing: bool = False) -> list[SubphaseSolution]:
+                     stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:
         """Swing1 from the toe-off posture, swing2 from swing1's end (the knee's rate from swing1's
         kinematic constraint), swing3 from the knee locked at t2 (eq. 5). ``stance_events``: the
         stance's lock events, None in the closing step (whose stance has none)."""
@@ -354,7 +353,7 @@ class StepController:
         u1 = [s1.parameters[k] for k in specs["swing1"].unknown_names]
         th4d = float(evaluate(specs["swing1"].rhs, x_end1, t1, u1, c2)[0][7])
         grid2, x02 = time_grid(t1, t2, self.n, [t.t_theta1_off]), np.concatenate([x_end1, [th4d]])
-        if closing:   # no recovery: the foot comes down in place (swing_spec.py, swing2_closing)
+        if plan.constraints.closing:   # no recovery: the foot comes down in place (swing_spec.py, swing2_closing)
             s2 = self._solve(index, SubphaseProblem(specs["swing2_closing"], x02, grid2, c2, self._guess(
                 "swing2_closing", 4), self.scales["swing2_closing"], mode=mode2))
         else:

@@ -75,11 +75,11 @@ CLOSING_APPROACH_DEG = 4.0
 #: ``swing_peak_position``, 0.3, elsewhere). Its ankle comes down from the toe-off height (the heel
 #: raised) to its t1 height over a short travel; with the peak at 0.3 D the descent's steepest
 #: slope met the direction the extending knee moves the ankle (the shank 30-40° behind vertical),
-#: where the knee cannot keep the ankle on the curve (∂g/∂θ4 down to 0.012): swing1 lost the curve
-#: by 3 mm and handed swing2 a knee rate anywhere in −72 to −722 °/s, and some closing steps of
-#: tall bodies at 3.5-4.5 km/h peaked at 2.3-2.6 N m/kg of hip torque. Spread over 0.8 D the
-#: descent stays clear of it: on the envelope grid's closing steps ∂g/∂θ4 ≥ 0.05 and the ankle on
-#: the curve to 2e-5 mm (was 0.0075 and up to 3.5 mm off); 0.15 D failed to converge in some steps.
+#: where the knee cannot keep the ankle on the curve (∂g/∂θ4 down to 0.0075 on the envelope grid):
+#: swing1 lost the curve by up to 3.5 mm and handed swing2 a knee rate anywhere in −72 to −722 °/s,
+#: and some closing steps of tall bodies at 3.5-4.5 km/h peaked at 2.3-3.0 N m/kg of hip torque.
+#: Spread over 0.8 D the descent stays clear of it: ∂g/∂θ4 ≥ 0.05 and the ankle on the curve to
+#: 2e-5 mm on the grid's closing steps; 0.15 D failed to converge in some steps.
 CLOSING_CURVE_P_PEAK = 0.2
 #: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
 #: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
@@ -152,7 +152,7 @@ def closing_hip_settle(plan) -> float:
     vertical beside the stance leg from t2 on, then finds the hip high enough for a foot (issue #36
     item 6; people rise as the last foot comes down)."""
     t = plan.timings
-    return (t.t_ds + t.t_swing2_end) / t.t_step if plan.constraints.step_length == 0 else 1.0
+    return (t.t_ds + t.t_swing2_end) / t.t_step if plan.constraints.closing else 1.0
 
 
 def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool, rotation_start: float | None = None) -> PelvisSchedule:
@@ -167,7 +167,7 @@ def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool, rotation_start: f
         rotation_start = 0.0 if starts_at_rest else attrs.rad("pelvic_rotation")
     return PelvisSchedule(width=body.l0, rotation_start=rotation_start,
                           rotation_end=math.asin(plan.constraints.hip_shift / body.l0),
-                          list_peak=0.0 if plan.constraints.step_length == 0 else attrs.rad("pelvic_list"),
+                          list_peak=0.0 if plan.constraints.closing else attrs.rad("pelvic_list"),
                           t_step=plan.timings.t_step)
 
 
@@ -236,8 +236,8 @@ def _reach_of(body: Body, knee: float) -> float:
 def thigh_peak(attrs, constraints) -> float:
     """θ3 at t1, where swing1 brings the thigh to rest and swing2 holds it: ahead of its
     heel-strike angle (eq. 3; θ3 < 0 ahead of the hip) by ``terminal_swing_retraction``; in a
-    walk's closing step (sl = 0) behind it by CLOSING_APPROACH_DEG."""
-    if constraints.step_length == 0:
+    walk's closing step behind it by CLOSING_APPROACH_DEG."""
+    if constraints.closing:
         return constraints.theta3 + math.radians(CLOSING_APPROACH_DEG)
     return constraints.theta3 - math.radians(attrs.terminal_swing_retraction)
 
@@ -258,7 +258,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
     d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
     a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                 max(a0, a_min) + max(CURVE_P_PEAK_MARGIN_REL * b.l1, CURVE_P_PEAK_MARGIN_TRAVEL * d_travel))
-    peak = (min(a.swing_peak_position, CLOSING_CURVE_P_PEAK) if con.step_length == 0 else a.swing_peak_position) * d_travel
+    peak = (min(a.swing_peak_position, CLOSING_CURVE_P_PEAK) if con.closing else a.swing_peak_position) * d_travel
     knee_t1_angle = shank_t1 - thigh_t1
     knee_rate = -a.knee_rate_at_t1 * knee_t1_angle / (t2 - t1)
     end_slope = end_slope_for_knee_rate(b, shank_t1, hip_vel_t1, knee_rate)

@@ -100,6 +100,12 @@ class StepConstraints:
     hip_lead: float = 0.0
 
     @property
+    def closing(self) -> bool:
+        """Whether this is the step that ends a walk at rest (``step_constraints(closing=True)``):
+        the swing foot lands beside the stance foot, sl = 0."""
+        return self.step_length == 0
+
+    @property
     def landing_w(self) -> float:
         """The next stance leg's length at this heel strike: the landing hip to the next origin."""
         return math.hypot(self.hip_y - self.ankle_y, self.landing_hip_x - self.next_ankle_x)
