@@ -4,13 +4,16 @@
 
 1. The natural walk (5 km/h, 1.8 m, 80 kg, multiple shooting), ``--steps`` steps after five warm-up
    steps: for each, the time from asking for it to its message ready to send, as the server does
-   it (:meth:`klaw_ocp.stepwise.StepwiseWalk.next_step`: the next step solved and this step's body
-   frames on their window, then :func:`klaw_ocp.serve.protocol.step_message` and ``json.dumps``),
-   split into the solve, the frames, dynamics.csv's rows and the message. p50 and p99 of each.
+   it (:meth:`klaw_ocp.stepwise.StepwiseWalk.next_step`: the next step's stance half solved and this
+   step's body frames on their window, then :func:`klaw_ocp.serve.protocol.step_message` and
+   ``json.dumps``), split into those parts; then what the server does after sending it, while the
+   page shows the step before (the rest of the next step: its swings and its rows of dynamics.csv,
+   :meth:`~klaw_ocp.stepwise.StepwiseWalk.finish_ahead`), and the step's whole work (the sum). p50
+   and p99 of each.
 2. How far ahead the next step is ready, at speeds across the envelope (0.5 to 9 km/h at eq. 1's
-   natural step, in both solver modes): the step's duration over the time to make the next one
-   ready (a step is asked for as the one before begins, at the latest 0.25 s before it ends: the
-   ratio says how many times over that time would have made it). The smallest over the steps.
+   natural step, in both solver modes): the step's duration over the whole work of making the next
+   one ready (a step is asked for as the one before begins, at the latest 0.25 s before it ends:
+   the ratio says how many times over that time would have made it). The smallest over the steps.
 
 3. Memory: the process's resident size after one page's walk (warm: solvers built, kernels loaded),
    then after 20 more pages that each walked 10 steps and closed, through the ASGI test client:
@@ -29,7 +32,6 @@ import time
 import numpy as np
 
 from klaw_ocp.config import ExperimentConfig
-from klaw_ocp.results import step_table
 from klaw_ocp.serve.protocol import step_message
 from klaw_ocp.solvers.thread_safety import solving
 from klaw_ocp.stepwise import ReadyStep, StepwiseWalk, step_frames
@@ -43,42 +45,56 @@ def config(speed: float, method: str = "multiple-shooting") -> ExperimentConfig:
 
 
 def timed_step(live: StepwiseWalk) -> dict:
-    """One step made ready as StepwiseWalk.next_step makes it, each part timed (ms)."""
+    """One step made ready as StepwiseWalk.next_step makes it, each part timed (s): the next step's
+    stance half, this step's frames and its message; then, after it is sent, the rest of the next
+    step (its swings and its rows of dynamics.csv: StepwiseWalk.finish_ahead, as the server calls it
+    while the page shows the step before)."""
+    k = live._shown                                # noqa: SLF001 - the parts of next_step, timed
     t0 = time.perf_counter()
     with solving():
-        result = live._loop.solve_next()          # noqa: SLF001 - the parts of next_step, timed
-    live.walk.steps.append(result)
+        live._ahead = live._loop.begin_next()      # noqa: SLF001
     t1 = time.perf_counter()
-    k = live._shown                                # noqa: SLF001
-    frames = step_frames(live.walk, k, live.spec.fps)
+    frames = step_frames(live.walk, k, live.spec.fps, live._ahead)     # noqa: SLF001
     t2 = time.perf_counter()
-    table = step_table(live.walk.steps[k], live.body)
-    t3 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
-    ready = ReadyStep(k, live.walk.steps[k], table, frames, t3 - t0, False)
+    ready = ReadyStep(k, live.walk.steps[k], live._rows.pop(k), frames, t2 - t0, False)     # noqa: SLF001
     json.dumps(step_message(ready, live.body, live.attributes, {"step": live.last_planned.index}), allow_nan=False)
+    t3 = time.perf_counter()
+    live.finish_ahead()
     t4 = time.perf_counter()
-    return {"solve": t1 - t0, "frames": t2 - t1, "table": t3 - t2, "message": t4 - t3, "total": t4 - t0,
-            "t_step": live.walk.steps[k].plan.timings.t_step}
+    return {"stance": t1 - t0, "frames": t2 - t1, "message": t3 - t2, "ready": t3 - t0,
+            "rest": t4 - t3, "work": t4 - t0, "t_step": live.walk.steps[k].plan.timings.t_step}
+
+
+PARTS = {"ready": "ready to send (asked -> message)", "stance": "  the next step's stance half",
+         "frames": "  this step's frames", "message": "  its message (JSON)",
+         "rest": "after sending: next step's rest", "work": "the whole step's work"}
+
+
+def warm(live: StepwiseWalk, steps: int) -> None:
+    for _ in range(steps):
+        live.next_step()
+    live.finish_ahead()
 
 
 def natural(steps: int) -> dict:
     live = StepwiseWalk(config(5.0))
-    for _ in range(5):
-        live.next_step()
+    warm(live, 5)
     rows = [timed_step(live) for _ in range(steps)]
     out = {}
-    for part in ("solve", "frames", "table", "message", "total"):
+    for part in PARTS:
         ms = np.array([r[part] for r in rows]) * 1000
         out[part] = {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
     return out
 
 
 def ahead(speed: float, method: str, steps: int = 12) -> float:
+    """The smallest ratio of a step's duration to the whole work of making the next one ready
+    (its stance half, frames, rows and message, and its swings after sending)."""
     live = StepwiseWalk(config(speed, method))
-    live.next_step()
+    warm(live, 1)
     rows = [timed_step(live) for _ in range(steps)]
-    return min(r["t_step"] / r["total"] for r in rows)
+    return min(r["t_step"] / r["work"] for r in rows)
 
 
 def rss_mb() -> float:
@@ -120,8 +136,8 @@ def main() -> None:
     args = parser.parse_args()
     load = os.getloadavg()[0]
     result = {"load_average": load, "natural": natural(args.steps), "ahead": {}}
-    for line, values in result["natural"].items():
-        print(f"natural walk, {line:8s}: p50 {values['p50_ms']:6.2f} ms  p99 {values['p99_ms']:6.2f} ms")
+    for part, values in result["natural"].items():
+        print(f"natural walk, {PARTS[part]:34s}: p50 {values['p50_ms']:6.2f} ms  p99 {values['p99_ms']:6.2f} ms")
     for method in ("multiple-shooting", "plain-shooting"):
         ratios = {speed: ahead(speed, method) for speed in SPEEDS_KMH}
         result["ahead"][method] = ratios

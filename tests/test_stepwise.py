@@ -145,7 +145,8 @@ def test_a_plan_asked_again_without_a_change_is_the_plan_made_before():
     live.next_step()
     planned = live.last_planned
     live.request(speed=5.0)             # the walk's own speed: nothing to change
-    live.next_step()
+    live.next_step()                    # (step 2's stance half solved with it: its frames read it)
+    live.finish_ahead()
     assert live.walk.steps[2].plan is planned
 
 
@@ -220,3 +221,42 @@ def test_a_walk_from_rest_ramps_up_to_its_speed_and_reproduces():
     assert speeds[0] == 5.0 and speeds[-1] == pytest.approx(7.0)     # start_speed_max, then 1 km/h a step
     again = simulate_walk(live.reproducing_config())
     assert [s.plan for s in again.steps] == [s.plan for s in live.walk.steps]
+
+
+def test_a_step_is_handed_out_with_the_next_steps_stance_half_only_and_the_same_frames():
+    """A step's frames read the next step's stance half alone (the landing foot, the double support
+    that completes the stance leg), so next_step leaves that step's swings for later
+    (finish_ahead, which the server calls once the step is sent): the frames are the same whether
+    the swings were solved before or not, and the walk the same as simulate_walk's."""
+    eager, lazy = StepwiseWalk(config(steps=6)), StepwiseWalk(config(steps=6))
+    for k in range(6):
+        a, b = eager.next_step(), lazy.next_step()
+        # handed out step k: its swings solved, the next step's stance half only
+        assert len(lazy.walk.steps) == k + 1 and lazy._ahead is not None and lazy._ahead.index == k + 1
+        with pytest.raises(ValueError, match="not solved yet"):
+            lazy._ahead.subphase("swing1")
+        eager.finish_ahead()
+        assert np.array_equal(a.frames.angles, b.frames.angles) and np.array_equal(a.frames.root, b.frames.root)
+        assert a.dynamics.keys() == b.dynamics.keys()
+    lazy.finish_ahead()
+    for a, b in zip(eager.walk.steps, lazy.walk.steps, strict=True):
+        for sa, sb in zip(a.subphases, b.subphases, strict=True):
+            assert np.array_equal(sa.states, sb.states)
+    whole = simulate_walk(config(steps=7))
+    for a, b in zip(whole.steps, lazy.walk.steps, strict=True):
+        assert [s.name for s in a.subphases] == [s.name for s in b.subphases] == ["stance", "swing1", "swing2", "swing3"]
+        for sa, sb in zip(a.subphases, b.subphases):
+            assert np.array_equal(sa.states, sb.states), (a.index, sa.name)
+
+
+def test_the_step_loop_finishes_a_step_before_beginning_or_revising_another():
+    live = StepwiseWalk(config())
+    live.next_step()                    # step 0 whole, step 1's stance half
+    loop = live._loop
+    assert loop.pending is not None and loop.pending[0].index == 1
+    with pytest.raises(ValueError, match="swings are not solved"):
+        loop.begin_next()
+    with pytest.raises(ValueError, match="a step begun"):
+        loop.revise_next((live.last_planned, False))
+    live.finish_ahead()
+    assert loop.pending is None and live.walk.steps[-1].index == 1 and live.finish_ahead() is None

@@ -13,7 +13,7 @@ import numpy as np
 
 from .body import Body
 from .control.periodic_start import periodic_start
-from .control.step import StepController, StepInput, StepResult
+from .control.step import StanceStage, StepController, StepInput, StepResult
 from .control.step_stages import stance_leg_rules
 from .dynamics import heel_strike_map
 from .kinematics.virtual_leg import hind_foot_at_rest
@@ -61,24 +61,51 @@ class StepLoop:
         inp.hind_foot = hind_foot_at_rest(spec.body, spec.attributes, inp.hind_ankle_x, spec.start_from_rest,
                                           first.timings.t_cycle, first.timings.t_ds)
         self.inp = inp
-        #: the step solved last
+        #: the step solved last, and the stance half of the one begun after it (its swings not yet solved)
         self.last: StepResult | None = None
+        self.pending: tuple | None = None     # (its StanceStage, plan_of's answer for the step after it)
 
     def solve_next(self) -> StepResult | None:
         """Solve the next step and return it; None once the walk has no step left."""
         if self.current is None:
             return None
-        (plan, at_rest), k = self.current, self.k
-        following = self.plan_of(k + 1)
+        (plan, at_rest), k, following = self._begin()
+        return self._advance(self.controller.solve_step(plan, self.inp, k, at_rest=at_rest), following)
+
+    def begin_next(self) -> StanceStage | None:
+        """Solve the next step's stance half (:class:`~klaw_ocp.control.step.StanceStage`), what the
+        body of the step before reads of it; None once the walk has no step left. :meth:`finish_next`
+        solves the rest of it (the same numbers as :meth:`solve_next`) before any further step."""
+        if self.current is None:
+            return None
+        (plan, at_rest), k, following = self._begin()
+        self.pending = (self.controller.solve_stance_stage(plan, self.inp, k, at_rest=at_rest), following)
+        return self.pending[0]
+
+    def finish_next(self) -> StepResult:
+        """Solve the rest of the step begun last (:meth:`begin_next`: its swings) and return it."""
+        if self.pending is None:
+            raise ValueError("finish_next: no step begun")
+        stage, following = self.pending
+        self.pending = None
+        return self._advance(self.controller.solve_swing_stage(stage), following)
+
+    def _begin(self):
+        """The next step's plan, index and the plan after it (principle 1: the high level before
+        the step), which its stance leg's knee schedule reads."""
+        if self.pending is not None:
+            raise ValueError(f"step {self.pending[0].index}'s swings are not solved yet")
+        following = self.plan_of(self.k + 1)
         next_plan = following[0] if following is not None else None
         # this stance leg's toe-off ends the next step's double support: its knee schedule
         # runs to that toe-off (this step's own where there is no next step)
         self.inp.next_t_ds = next_plan.timings.t_ds if next_plan is not None else None
-        result: StepResult = self.controller.solve_step(plan, self.inp, k, at_rest=at_rest)
+        return self.current, self.k, following
+
+    def _advance(self, result: StepResult, following) -> StepResult:
         # the step's stance leg is the next step's hind leg, whose double support completes it
-        self.inp = _next_input(self.spec, plan, result, next_plan)
-        self.current, self.k = following, k + 1
-        self.last = result
+        self.inp = _next_input(self.spec, result.plan, result, following[0] if following is not None else None)
+        self.current, self.k, self.last = following, self.k + 1, result
         return result
 
     def revise_next(self, following) -> StepResult:
@@ -87,8 +114,8 @@ class StepLoop:
         (:func:`with_next_plan`): the walk is then the one whose plans were these from the start,
         to the bit (tests/test_stepwise.py). The live playground moves a change one step earlier
         so."""
-        if self.current is None or self.last is None:
-            raise ValueError("revise_next: no step solved yet, or the walk has ended")
+        if self.current is None or self.last is None or self.pending is not None:
+            raise ValueError("revise_next: no step solved yet, a step begun, or the walk has ended")
         self.last = with_next_plan(self.controller, self.spec, self.last, following[0])
         self.inp = _next_input(self.spec, self.last.plan, self.last, following[0])
         self.current = following

@@ -29,7 +29,7 @@ from .body_motion.motion import BodyMotion, Samples, body_motion_at
 from .config import ExperimentConfig, check_stance_method, check_walk_size
 from .config import MAX_FRAMES
 from .control.gains import control_gains
-from .control.step import StepController, StepResult
+from .control.step import StanceStage, StepController, StepResult
 from .errors import ConfigError, GaitLimitError, out_of_range
 from .gait import closing_step
 from .gait.envelope import check_step_changes, check_step_length
@@ -47,7 +47,9 @@ from .walk import Walk, walk_spec
 class ReadyStep:
     """A solved step with its body: ``result`` (the step's solution), ``dynamics`` (its rows of
     dynamics.csv, :func:`klaw_ocp.results.step_table`), ``frames`` (its body frames) and
-    ``solve_s`` (the seconds it took to solve it and to build the previous step's frames)."""
+    ``solve_s`` (the seconds :meth:`StepwiseWalk.next_step` took to make it ready: the next step's
+    stance half solved, and this step's swings where they were not solved before, and its frames
+    built)."""
     index: int
     result: StepResult
     dynamics: dict
@@ -56,17 +58,19 @@ class ReadyStep:
     closing: bool
 
 
-def step_frames(walk: Walk, k: int, fps: float) -> BodyMotion:
+def step_frames(walk: Walk, k: int, fps: float, ahead: StanceStage | None = None) -> BodyMotion:
     """Step ``k``'s frames of ``walk``'s body, t = i/fps in [t_start_k, t_start_k+1) (the last step's up
     to the walk's end), equal to :func:`klaw_ocp.body_motion.body_motion`'s at those frames.
 
     The body at a frame reads its own step and the next (the stance leg completed by the next
     step's double support, the swing leg's landing on the next stance foot), so it is built on a
     window from step k (k - 1 for an odd k: the window keeps the steps' legs, right for even
-    steps, left for odd) to step k + 1."""
-    steps = walk.steps
+    steps, left for odd) to step k + 1. Of step k + 1 it reads the stance half alone: ``ahead``,
+    that half (:class:`~klaw_ocp.control.step.StanceStage`) where ``walk`` ends with step k and its
+    swings are not solved yet."""
+    steps = walk.steps if ahead is None else [*walk.steps, ahead]
     last = k == len(steps) - 1
-    end = walk.duration if last else steps[k + 1].t_start
+    end = walk.duration if last else steps[k + 1].t_start      # (the last is never ``ahead``'s step)
     i = np.arange(max(math.floor(steps[k].t_start * fps) - 1, 0), math.floor(end * fps + 1e-9) + 2)
     if last:
         i = i[i <= math.floor(end * fps + 1e-9)]     # frame_times' last frame
@@ -133,6 +137,10 @@ class StepwiseWalk:
             self._loop = StepLoop(self.spec, controller, self._plan_of)
         self.walk.initial_state = self._loop.initial_state.copy()
         self._shown = 0          # the next step to hand out with its frames
+        #: the stance half of the step after the last one solved whole (:meth:`finish_ahead`)
+        self._ahead: StanceStage | None = None
+        #: each solved step's rows of dynamics.csv until it is handed out
+        self._rows: dict = {}
         self.ended = False
 
     # -- the high level, one step ahead --------------------------------------------------------
@@ -257,26 +265,50 @@ class StepwiseWalk:
 
     # -- the middle and low levels -------------------------------------------------------------
     def next_step(self) -> ReadyStep | None:
-        """Solve the next step (if any is left) and return the oldest step not yet handed out,
-        with its frames; None once every step has been handed out. Raises
+        """Return the oldest step not yet handed out, with its frames, solving what they need: the
+        step itself whole (its swings, unless :meth:`finish_ahead` solved them after the step before
+        was handed out) and the next step's stance half (:meth:`StepLoop.begin_next`), whose swings
+        the frames do not read; None once every step has been handed out. Raises
         :class:`~klaw_ocp.errors.ConvergenceError` if a step does not converge."""
         t0 = time.perf_counter()
-        while not self.ended and len(self.walk.steps) <= self._shown + 1:
-            self._revise_next_plan()
-            with solving():
-                result = self._loop.solve_next()
-            if result is None:
-                self.ended = True
-            else:
-                self.walk.steps.append(result)
-        if self._shown >= len(self.walk.steps):
-            return None
         k = self._shown
-        frames = step_frames(self.walk, k, self.spec.fps)
+        self.finish_ahead()
+        while not self.ended and len(self.walk.steps) <= k:
+            self._begin_next()
+            self.finish_ahead()
+        if k >= len(self.walk.steps):
+            return None
+        if not self.ended and len(self.walk.steps) == k + 1:
+            self._begin_next()
+        frames = step_frames(self.walk, k, self.spec.fps, self._ahead)
         result = self.walk.steps[k]
         self._shown += 1
-        return ReadyStep(k, result, step_table(result, self.body), frames, time.perf_counter() - t0,
-                         closing=self._closing_at == k)
+        return ReadyStep(k, result, self._rows.pop(k), frames, time.perf_counter() - t0, closing=self._closing_at == k)
+
+    def _begin_next(self) -> None:
+        """The next step's stance half, from its plan as it stands now (:meth:`_revise_next_plan`)."""
+        self._revise_next_plan()
+        with solving():
+            self._ahead = self._loop.begin_next()
+        if self._ahead is None:
+            self.ended = True
+
+    def finish_ahead(self) -> StepResult | None:
+        """Solve the swings of the step whose stance half was solved ahead (the frames of the step
+        before it needed that half alone), if any, and return that step. The server calls it once
+        it has sent a step, while the page shows the one before; :meth:`next_step` calls it first
+        otherwise. Either way the steps are solved in the same order, to the same numbers. The
+        step's rows of dynamics.csv are made here too: they read that step alone."""
+        if self._ahead is None:
+            return None
+        self._ahead = None           # (a step whose swings fail ends the walk: not tried again)
+        with solving():
+            result = self._loop.finish_next()
+        self.walk.steps.append(result)
+        # its rows of dynamics.csv read the step alone (not the plan after it, which may still
+        # change the stance leg's rules): final now
+        self._rows[result.index] = step_table(result, self.body)
+        return result
 
     @property
     def last_planned(self):

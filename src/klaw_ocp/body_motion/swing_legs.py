@@ -30,7 +30,7 @@ from ..dynamics.points import foot_points_arrays
 from ..kinematics.leg_geometry import clamp, foot_pieces, leg_fk, leg_ik, smoothstep
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .swing_foot_guard import guard_grid, lifted_feet
-from .walk_samples import swing_curves
+from .walk_samples import swing_curves, swung_steps
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
 #: posture (the model's ankle reached from the leg's own hip) into the dynamic knee angle
@@ -44,8 +44,8 @@ _T_TOE_OFF, _T1, _T2, _T_HEEL_STRIKE = (SCHEDULE_FIELDS.index(name)
 
 def _schedules(walk) -> np.ndarray:
     """(steps, len(SCHEDULE_FIELDS)): each step's swing foot's schedule, one row a step (read once
-    for every pass that indexes it by step)."""
-    return np.array([[getattr(s.swing_foot, name) for name in SCHEDULE_FIELDS] for s in walk.steps], float)
+    for every pass that indexes it by step; :func:`.walk_samples.swung_steps`)."""
+    return np.array([[getattr(s.swing_foot, name) for name in SCHEDULE_FIELDS] for s in swung_steps(walk)], float)
 
 
 def _model_leg(body, swing, step, tau, simulated_hip):
@@ -109,11 +109,11 @@ def swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
     """:func:`swing_samples`, and the guard grids."""
-    steps = walk.steps
+    steps, swung = walk.steps, swung_steps(walk)
     grids = [guard_grid(steps[k].swing_foot) for k in swinging]
-    m = len(steps)
-    return (np.concatenate([np.arange(m), np.arange(m - 1), np.repeat(swinging, [len(g) for g in grids])]),
-            np.concatenate([[s.swing_foot.t_toe_off for s in steps], [s.swing_foot.t_heel_strike for s in steps[:-1]]]
+    m = len(swung)
+    return (np.concatenate([np.arange(m), np.arange(len(steps) - 1), np.repeat(swinging, [len(g) for g in grids])]),
+            np.concatenate([[s.swing_foot.t_toe_off for s in swung], [s.swing_foot.t_heel_strike for s in steps[:-1]]]
                            + grids), grids)
 
 
@@ -141,8 +141,10 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     else:
         at_simulated, at_own = hips_at(at_step, at_t)
     simulated, own = hips_at(step, tau) if hips is None else hips
-    m = len(steps)
-    ends = 2 * m - 1
+    # each swung step's toe-off, and the heel strike of each step before the last (a last step that
+    # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`)
+    m, landings = len(swung_steps(walk)), len(steps) - 1
+    ends = m + landings
     end_step, end_t, grid_step, grid_t = at_step[:ends], at_t[:ends], at_step[ends:], at_t[ends:]
     g = len(grid_t)
     legs_step, legs_tau = np.concatenate([grid_step, step]), np.concatenate([grid_t, tau])
@@ -150,11 +152,12 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
                               np.concatenate([at_simulated, simulated]))
     landing_ankles, landing_pitches = _landing_feet(walk)
     ankle_offset, shank_offset = _end_offsets(schedules, end_step, end_t, (shank[:ends], ankle[:ends]),
-                                              np.concatenate([toe_off_feet[0], landing_ankles]),
-                                              np.concatenate([toe_off_feet[1], landing_pitches]))
-    # at the toe-offs, and at the heel strikes (the last step's none: zero)
+                                              np.concatenate([toe_off_feet[0][:m], landing_ankles]),
+                                              np.concatenate([toe_off_feet[1][:m], landing_pitches]))
+    # at the toe-offs, and at the heel strikes (a walk's last step's none: zero)
     toe_off = (ankle_offset[:m], shank_offset[:m])
-    landing = (np.concatenate([ankle_offset[m:], np.zeros((1, 2))]), np.concatenate([shank_offset[m:], np.zeros(1)]))
+    landing = (np.concatenate([ankle_offset[m:], np.zeros((m - landings, 2))]),
+               np.concatenate([shank_offset[m:], np.zeros(m - landings)]))
     legs_own = np.concatenate([at_own[ends:], own])
     legs_shank, legs_ankle = _body_leg(schedules, legs_step, legs_tau, (shank[ends:], ankle[ends:]),
                                        np.concatenate([at_simulated[ends:], simulated]), legs_own, toe_off, landing)

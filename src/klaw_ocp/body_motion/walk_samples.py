@@ -167,13 +167,23 @@ def stance_at(walk, curves: StepCurves, step: np.ndarray, tau: np.ndarray) -> tu
     return hip, theta2
 
 
+def swung_steps(walk) -> list:
+    """The walk's steps whose swings are solved: every one, but a last one that is only its stance
+    half (a :class:`~klaw_ocp.control.step.StanceStage`, which the live playground's frames of the
+    step before read for its stance foot: docs/serve.md)."""
+    steps = walk.steps
+    return steps if steps[-1].has_swings else steps[:-1]
+
+
 def swing_curves(walk) -> StepCurves:
-    """θ3, θ4 of every step's swing leg from toe-off to heel strike: swing1 (θ4 kinematic: the
-    rates of a C1 spline), swing2 (θ4 with θ̇4), swing3 (the knee locked: θ4 = 0). Swing2's first
-    node repeats swing1's last: the later one wins, as it does between any two subphases."""
-    t_step = [s.plan.timings.t_step for s in walk.steps]
+    """θ3, θ4 of every step's swing leg from toe-off to heel strike (:func:`swung_steps`): swing1
+    (θ4 kinematic: the rates of a C1 spline), swing2 (θ4 with θ̇4), swing3 (the knee locked:
+    θ4 = 0). Swing2's first node repeats swing1's last: the later one wins, as it does between any
+    two subphases."""
+    swung = swung_steps(walk)
+    t_step = [s.plan.timings.t_step for s in swung]
     pieces = []
-    for k, step in enumerate(walk.steps):
+    for k, step in enumerate(swung):
         swing1, swing2, swing3 = (step.subphase(name) for name in ("swing1", "swing2", "swing3"))
         x, rates = swing1.states, np.empty((len(swing1.t), 2))
         rates[:, 0], rates[:, 1] = x[:, 8], spline_rates(swing1.t, x[:, 7])

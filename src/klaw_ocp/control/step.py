@@ -9,7 +9,7 @@ stance ankle at ``(origin_x, l9)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -18,22 +18,20 @@ from ..body import DYNAMIC_PARAMETER_NAMES, Body
 from ..dynamics import knee_lock_map, stance_hips
 from ..dynamics.evaluate import evaluate
 from ..errors import ConvergenceError
-from ..gait import StepPlan
-from ..kinematics.pelvis import PelvisSchedule
-from ..kinematics.swing_foot import SwingFoot
-from ..kinematics.virtual_leg import StanceFoot
 from ..solvers import SubphaseProblem, SubphaseSolution, time_grid
-from ..solvers.plain_shooting import EVENT_FREE_ROOT
 from ..solvers.problem import mapped
 from .gains import ControlGains
 from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
-from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, lock_rule_nodes, stance_fixed,
+from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_clearance import clearance_retraction
-from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, hind_leg_double_support, node_at, plan_curve_p,
-                          stance_leg_rules, step_pelvis, swing_context, thigh_peak, with_curve_p)
+from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, completed_hind_leg, double_support,
+                          landing_stance_foot, node_at, plan_curve_p, step_pelvis, swing_context, thigh_peak,
+                          with_curve_p)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
+# (StepInput, StepResult and the stance notes are read from here too: what a step takes and gives)
+from .step_result import StanceStage, StepInput, StepResult, lock_rule_notes, solved_without_events  # noqa: F401
 
 #: The solvers' unknowns are scaled to order one by these magnitudes (finite differences, trust regions
 #: and tolerances then act alike on each). F_theta1: 5 % of the body's weight times l1; the stance's pa
@@ -101,99 +99,6 @@ def stance_grid(t_step: float, n: int, breakpoints) -> np.ndarray:
 def body_context(body: Body) -> dict:
     """The body's entries of every subphase context (:data:`klaw_ocp.body.DYNAMIC_PARAMETER_NAMES`)."""
     return dict(zip(DYNAMIC_PARAMETER_NAMES, body.dynamic_parameters()))
-
-
-@dataclass
-class StepInput:
-    """What a step needs besides its plan: where it starts and how the body arrives there."""
-    x0: np.ndarray                 # stance state at heel strike, relative to the stance ankle
-    origin_x: float                # stance ankle x (flat-foot ankle, eq. 3's ankle1)
-    hind_ankle_x: float            # flat-foot ankle x of the hind (soon swinging) leg
-    y_start: float                 # hip height above the stance ankle at heel strike
-    excursion: float               # height of the hip's mid-step bump (0 for start/stop steps)
-    #: the hind leg's virtual leg: its stance so far (the previous step's ``stance_foot``)
-    hind_foot: StanceFoot | None = None
-    #: the stance foot stands flat from the start, with no heel strike (a walk from rest's first step)
-    stance_standing: bool = False
-    #: the next step's double support (s), which ends with this stance leg's toe-off; None: the
-    #: walk's last step (its own double support stands in)
-    next_t_ds: float | None = None
-    #: the pelvis's rotation at this heel strike (rad): the one the step before ended with (its
-    #: plan's ``pelvic_rotation``, which eq. 3 split it by); None: this step's own (0 standing)
-    pelvis_rotation: float | None = None
-
-
-@dataclass(frozen=True)
-class StepResult:
-    """A solved step, built once when it is solved: its subphase solutions, the kinematic double
-    support of the hind leg and the virtual-leg rules of its own stance leg. The stance leg's
-    double support, and so its toe-off, belongs to the next step (its ``hind_foot``):
-    :meth:`klaw_ocp.walk.Walk.stance_foot` gives the leg completed."""
-    index: int
-    origin_x: float
-    hind_ankle_x: float
-    t_start: float
-    subphases: list[SubphaseSolution]
-    #: the hind leg's samples over the double support (``t``, ``theta3``, ``theta4``, ``pitch``)
-    double_support: dict
-    #: curve P's numbers (:meth:`klaw_ocp.control.step_stages.CurveP.as_dict`)
-    curve_p: dict
-    final_stance_state: np.ndarray
-    heel_clearance_min: float
-    plan: StepPlan
-    notes: list[str]
-    #: the hip-height sinusoid the stance is guided towards (§4.2), in the stance ankle's frame:
-    #: ``y_start``/``y_end`` (the two heel-strike heights) and ``excursion`` (the mid-step bump), m,
-    #: and the bump's ``rise`` and ``fall`` (fractions of the step) and the fall's ``power``
-    hip_reference: dict
-    #: the hind leg's virtual leg, completed by this step's double support (the previous stance
-    #: leg's rules with their toe-off), and its samples there: (leg stance times, world hips (n, 2))
-    hind_foot: StanceFoot
-    hind_samples: tuple[np.ndarray, np.ndarray]
-    #: this step's stance leg: the rules its own stance fixed (heel strike, foot flat, heel-off;
-    #: :func:`klaw_ocp.control.step_stages.stance_leg_rules`); the next step's double support
-    #: completes them into that step's ``hind_foot``
-    stance_foot: StanceFoot
-    #: the world hip at every stance node (m)
-    stance_hips: np.ndarray
-    #: the swing foot's angle schedule, step-local times
-    swing_foot: SwingFoot
-    #: the pelvis's rotation and list about the stance hip (§4.2), which carry the swing leg's hip
-    pelvis: PelvisSchedule
-    #: how far ahead of its heel-strike angle the thigh peaked at t1 (deg): the attribute
-    #: ``terminal_swing_retraction``, or more where the swing leg needed it to clear the ground
-    #: (control/swing_clearance.py); a closing step's is negative (behind: step_stages.thigh_peak)
-    thigh_retraction_deg: float = 0.0
-
-    def subphase(self, name: str) -> SubphaseSolution:
-        return next(s for s in self.subphases if s.name == name)
-
-
-def solved_without_events(stance: SubphaseSolution) -> bool:
-    """Whether plain shooting took a stance's root with its lock events disarmed (the smooth
-    problem's, keeping the lock rule at the nodes: solvers/plain_shooting.py, EVENT_FREE_ROOT); the
-    swings that re-simulate it then disarm them too, as a closing stance's do."""
-    return EVENT_FREE_ROOT in stance.fallbacks
-
-
-def lock_rule_notes(stance: SubphaseSolution, l1: float, tol: float = 1e-7) -> list:
-    """How the stance met the lock rule (w <= l1 while theta1 < 0, once the leg has come down to l1).
-
-    Plain shooting locks the leg (events); multiple shooting holds the rule as a path constraint,
-    re-solving with IPOPT when the square solution breaks it. A breach left in a solution (the
-    closing stance, or ``nlp: rootfinder``) is reported, not hidden.
-    """
-    if stance.events:
-        return [f"stance lock events: {', '.join(f'{n} at t={t:.3f} s' for n, t in stance.events)}"]
-    w = stance.states[:, 0]
-    on_limit = lock_rule_nodes(stance.states, l1) & (w > l1 - tol)
-    breach = np.flatnonzero(on_limit & (w > l1 + tol))
-    if breach.size:
-        return [f"lock rule not enforced: w exceeds l1 by {w[breach].max() - l1:.3g} m at "
-                f"t={stance.t[breach[0]]:.3f} s while theta1 < 0"]
-    if on_limit[1:].any() and stance.nlp == choices.IPOPT:
-        return [f"lock rule held by the path constraint w <= l1 (IPOPT), first at t={stance.t[np.argmax(on_limit)]:.3f} s"]
-    return []
 
 
 class StepController:
@@ -286,36 +191,53 @@ class StepController:
 
     # -- the whole step ------------------------------------------------------------------------
     def solve_step(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StepResult:
-        """One step in its stages: the stance (solved), the stance leg's own virtual-leg rules, the
-        pelvis (its other hip, from which the hind leg and the swing hang), the hind leg's double
-        support to toe-off, curve P and the swing foot, the swing context, the
-        three swings (solved), the heel's clearance before it strikes."""
-        b, t, a = self.body, plan.timings, plan.attributes       # (a schedule's per step)
+        """One step in its stages: the stance half (:meth:`solve_stance_stage`), then the swings
+        (:meth:`solve_swing_stage`)."""
+        return self.solve_swing_stage(self.solve_stance_stage(plan, inp, index, at_rest))
+
+    def solve_stance_stage(self, plan, inp: StepInput, index: int, at_rest: bool = False) -> StanceStage:
+        """The step's first stages, what the body of the step before reads: the stance (solved),
+        the stance leg's heel-strike foot, the pelvis (its other hip, from which the hind leg and
+        the swing hang), the hind leg's rules completed to toe-off."""
+        b, a = self.body, plan.attributes       # (a schedule's per step)
         stance = self.solve_stance(plan, inp, index, at_rest)
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
-        stance_foot = stance_leg_rules(b, a, plan, stance, hips, inp.origin_x, inp.stance_standing,
-                                       inp.next_t_ds)
+        landing = landing_stance_foot(b, a, plan, stance, hips, inp.origin_x, inp.stance_standing, inp.next_t_ds)
         pelvis = step_pelvis(b, a, plan, inp.stance_standing, inp.pelvis_rotation)
         other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
-        ds = hind_leg_double_support(a, plan, stance, other_hips, other_vels, inp.hind_foot)
+        hind = completed_hind_leg(a, plan, stance, other_hips, inp.hind_foot)
+        return StanceStage(index, plan, inp, at_rest, stance, stance_ctx, hips, hip_vels, other_hips, other_vels,
+                           landing, pelvis, hind)
+
+    def solve_swing_stage(self, stage: StanceStage) -> StepResult:
+        """The step's other stages from its stance half: the stance leg's heel-off, the hind leg
+        over the double support to toe-off, curve P and the swing foot, the swing context, the
+        three swings (solved), the heel's clearance before it strikes."""
+        b, plan, inp, index, stance = self.body, stage.plan, stage.inp, stage.index, stage.stance
+        t, a, pelvis, other_hips, other_vels = plan.timings, plan.attributes, stage.pelvis, stage.other_hips, \
+            stage.other_vels
+        stance_foot = stage.landing_foot.find_heel_off(stance.t, stage.stance_hips)
+        ds = double_support(plan, stance, other_hips, other_vels, stage.hind_foot)
+        origin = np.array([inp.origin_x, b.l9])
         node_t1, node_to = node_at(stance.t, t.t_ds + t.t_swing1_end), node_at(stance.t, t.t_ds)
-        events = None if at_rest or solved_without_events(stance) else stance.events
+        events = None if stage.at_rest or solved_without_events(stance) else stance.events
 
         def swings_with(retraction_deg: float):
             # curve P, the swing foot and the swing context are planned about the thigh's peak
             a_r = a if retraction_deg == a.terminal_swing_retraction else \
                 a.with_overrides({"terminal_swing_retraction": retraction_deg})
             curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
-            c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
+            c = swing_context(b, a_r, self.gains, plan, stage.stance_ctx, stance.parameters, origin, curve, pelvis)
             return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
         # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the ankle would
         # pass lower than l9 (control/swing_clearance.py); a closing step's thigh comes in from behind (thigh_peak)
         (swings, _, curve, c), retraction = (
             (swings_with(a.terminal_swing_retraction), math.degrees(plan.constraints.theta3 - thigh_peak(a, plan.constraints)))
-            if at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction, self.retraction_hint))
+            if stage.at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction, self.retraction_hint))
         self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
+        stance_ctx = stage.stance_ctx
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],
                           double_support=ds.as_dict(), curve_p=curve.as_dict(),
@@ -326,7 +248,8 @@ class StepController:
                                          **{k: stance_ctx[f"hip_{k}"] for k in ("rise", "fall", "settle")},
                                          "power": stance_ctx["hip_fall_power"]},
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
-                          stance_hips=hips, swing_foot=curve.swing_foot, pelvis=pelvis, thigh_retraction_deg=retraction)
+                          stance_hips=stage.stance_hips, swing_foot=curve.swing_foot, pelvis=pelvis,
+                          thigh_retraction_deg=retraction)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
                      stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:

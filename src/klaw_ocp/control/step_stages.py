@@ -6,11 +6,12 @@ plain function of what the stage before it handed on:
    the hind leg's double support, curve P and the swing models take it from
    (:mod:`klaw_ocp.kinematics.pelvis`: the kinematics reaching back into the dynamics);
 1. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
-   its heel-strike foot and its heel-off; the next step's double support completes them (stage 2
-   of that step);
+   its heel-strike foot (:func:`landing_stance_foot`) and its heel-off; the next step's double
+   support completes them (stage 2 of that step);
 2. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
    to toe-off, where swing1 starts from its posture ("the continuing stance phase of the hind leg
-   is completed kinematically", §3);
+   is completed kinematically", §3): its rules completed (:func:`completed_hind_leg`), then the leg
+   there (:func:`double_support`);
 3. :func:`plan_curve_p`: curve P, the ankle path of swing1, from the toe-off ankle to the ankle
    with the toe under the knee at t1, and the swing foot's angle schedule;
 4. :func:`swing_context`: the numbers the swing models read (the stance context, the solved stance
@@ -174,36 +175,57 @@ def step_pelvis(body: Body, attrs, plan, starts_at_rest: bool, rotation_start: f
 def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
                      standing: bool = False, next_t_ds: float | None = None) -> StanceFoot:
     """The virtual leg's rules for the stance leg of a step (§4.2), from its solved ``stance`` and
-    the world hips at its nodes ``hips``: its heel-strike foot from the first hip (flat from the
-    start where it is ``standing``: the first step of a walk from rest), its knee's schedule to
-    the toe-off that ends the next step's double support (``next_t_ds``; this step's where there
-    is no next step), its heel-off from the stance's hips. The next step's double support
-    completes them (:func:`hind_leg_double_support`)."""
+    the world hips at its nodes ``hips``: its heel-strike foot (:func:`landing_stance_foot`), its
+    heel-off from the stance's hips. The next step's double support completes them
+    (:func:`hind_leg_double_support`)."""
+    return landing_stance_foot(body, attrs, plan, stance, hips, origin_x, standing, next_t_ds).find_heel_off(stance.t, hips)
+
+
+def landing_stance_foot(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
+                        standing: bool = False, next_t_ds: float | None = None) -> StanceFoot:
+    """The stance leg's rules as its heel strike fixes them, before its heel-off is found
+    (:meth:`~klaw_ocp.kinematics.virtual_leg.StanceFoot.find_heel_off`): its heel-strike foot from
+    the first hip (flat from the start where it is ``standing``: the first step of a walk from
+    rest), its knee's schedule to the toe-off that ends the next step's double support
+    (``next_t_ds``; this step's where there is no next step). The swing leg of the step before
+    lands on this foot."""
     t_step = plan.timings.t_step
     t_ds_next = plan.timings.t_ds if next_t_ds is None else next_t_ds
     if standing:
-        foot = StanceFoot.standing(body, attrs, origin_x, t_step, t_ds_next)
-    else:
-        _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
-        foot = StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity, t_ds_next)
-    return foot.find_heel_off(stance.t, hips)
+        return StanceFoot.standing(body, attrs, origin_x, t_step, t_ds_next)
+    _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
+    return StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity, t_ds_next)
 
 
 def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.ndarray,
                             hind: StanceFoot) -> DoubleSupport:
     """The previous stance's virtual leg goes on through this step's double support in the same
-    foot periods, to toe-off, where swing1 starts from it (kinematics.virtual_leg)."""
+    foot periods, to toe-off, where swing1 starts from it (kinematics.virtual_leg): its rules
+    completed (:func:`completed_hind_leg`), then the leg there (:func:`double_support`)."""
+    return double_support(plan, stance, hips, hip_vels, completed_hind_leg(attrs, plan, stance, hips, hind))
+
+
+def completed_hind_leg(attrs, plan, stance, hips: np.ndarray, hind: StanceFoot) -> StanceFoot:
+    """The hind leg's rules completed by this step's double support: its toe-off pitch where the
+    knee has its toe-off flexion, the pitch never below where single support left it."""
     t_to = plan.timings.t_ds
-    k_to = node_at(stance.t, t_to)
-    hip_to, hip_vel_to = hips[k_to], hip_vels[k_to]
-    t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
+    hip_to = hips[node_at(stance.t, t_to)]
     pitch_ds = hind.pitch_at_other_heel_strike(hips[0])
     # the pitch at which the knee has its toe-off flexion (the knee's schedule ends there)
     # and the least pitch at which the leg reaches its ankle at all (toe_off_pitch's floor), in one pass
     wanted, least = hind.reach_pitch(np.array([hip_to, hip_to]), np.array([_reach_of(hind.foot.body, hind.knee_toe_off),
                                                                           REACH_FRACTION]))
     pitch_to = toe_off_pitch(hind, hip_to, pitch_ds, float(wanted), plan.constraints.theta3, float(least))
-    hind = hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds, hip_toe_off=hip_to)
+    return hind.with_double_support(hips[0], t_to, pitch_to, start=pitch_ds, hip_toe_off=hip_to)
+
+
+def double_support(plan, stance, hips: np.ndarray, hip_vels: np.ndarray, hind: StanceFoot) -> DoubleSupport:
+    """The hind leg (``hind``, its rules completed: :func:`completed_hind_leg`) at the double
+    support's nodes and at toe-off, where swing1 starts from its posture."""
+    t_to = plan.timings.t_ds
+    k_to = node_at(stance.t, t_to)
+    hip_to, hip_vel_to = hips[k_to], hip_vels[k_to]
+    t0 = hind.t_step                      # this step's heel strike in the hind leg's stance time
     ds_nodes = np.flatnonzero(stance.t <= t_to + 1e-12)
     # swing1 starts with the thigh's mean rate over the last tenth of the double support: the
     # kinematic leg has a kink at toe-off (the heel rise stops; the leg may just have reached
