@@ -7,16 +7,18 @@ from klaw_ocp.errors import ConvergenceError
 
 @pytest.fixture
 def fail_at_step(monkeypatch):
-    """Make step ``index`` of any walk raise ConvergenceError(index, subphase, residual)."""
+    """Make step ``index`` of any walk raise ConvergenceError(index, subphase, residual): its
+    first half fails (``solve_step`` of a whole walk and the step-wise walk's ``begin_next`` both
+    start there)."""
     from klaw_ocp.control.step import StepController
-    original = StepController.solve_step
+    original = StepController.solve_stance_stage
 
     def arm(index: int, subphase: str, residual: float):
         def failing(self, plan, inp, k, at_rest=False):
             if k == index:
                 raise ConvergenceError(index, subphase, residual, "forced for the test")
             return original(self, plan, inp, k, at_rest)
-        monkeypatch.setattr(StepController, "solve_step", failing)
+        monkeypatch.setattr(StepController, "solve_stance_stage", failing)
     return arm
 
 

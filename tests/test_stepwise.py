@@ -260,3 +260,16 @@ def test_the_step_loop_finishes_a_step_before_beginning_or_revising_another():
         loop.revise_next((live.last_planned, False))
     live.finish_ahead()
     assert loop.pending is None and live.walk.steps[-1].index == 1 and live.finish_ahead() is None
+
+
+def test_a_step_that_fails_ends_the_walk_and_nothing_more_is_handed_out(fail_at_step):
+    """The step after a failed one's predecessor is never handed out as a last step it is not."""
+    from klaw_ocp.errors import ConvergenceError
+    fail_at_step(3, "swing2", 1e-3)
+    live = StepwiseWalk(config())
+    assert [live.next_step().index for _ in range(2)] == [0, 1]
+    with pytest.raises(ConvergenceError, match="step 3"):
+        live.next_step()                # step 2's frames need step 3's stance half
+    assert live.ended and isinstance(live.failed, ConvergenceError)
+    assert live.next_step() is None and live.finish_ahead() is None
+    assert [s.index for s in live.walk.steps] == [0, 1, 2]

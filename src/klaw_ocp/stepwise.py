@@ -141,6 +141,8 @@ class StepwiseWalk:
         self._ahead: StanceStage | None = None
         #: each solved step's rows of dynamics.csv until it is handed out
         self._rows: dict = {}
+        #: the error of the step that failed, which ended the walk (None while it goes on)
+        self.failed: Exception | None = None
         self.ended = False
 
     # -- the high level, one step ahead --------------------------------------------------------
@@ -269,21 +271,33 @@ class StepwiseWalk:
         step itself whole (its swings, unless :meth:`finish_ahead` solved them after the step before
         was handed out) and the next step's stance half (:meth:`StepLoop.begin_next`), whose swings
         the frames do not read; None once every step has been handed out. Raises
-        :class:`~klaw_ocp.errors.ConvergenceError` if a step does not converge."""
+        :class:`~klaw_ocp.errors.ConvergenceError` if a step does not converge, which ends the
+        walk (``failed``): nothing more is handed out."""
         t0 = time.perf_counter()
         k = self._shown
-        self.finish_ahead()
-        while not self.ended and len(self.walk.steps) <= k:
-            self._begin_next()
-            self.finish_ahead()
-        if k >= len(self.walk.steps):
+        if self.failed is not None:
             return None
-        if not self.ended and len(self.walk.steps) == k + 1:
-            self._begin_next()
+        try:
+            self.finish_ahead()
+            while not self.ended and len(self.walk.steps) <= k:
+                self._begin_next()
+                self.finish_ahead()
+            if k >= len(self.walk.steps):
+                return None
+            if not self.ended and len(self.walk.steps) == k + 1:
+                self._begin_next()
+        except Exception as err:
+            self._fail(err)
+            raise
         frames = step_frames(self.walk, k, self.spec.fps, self._ahead)
         result = self.walk.steps[k]
         self._shown += 1
         return ReadyStep(k, result, self._rows.pop(k), frames, time.perf_counter() - t0, closing=self._closing_at == k)
+
+    def _fail(self, err: Exception) -> None:
+        """A step that did not converge (or any fault of it) ends the walk: nothing more is handed
+        out (the step before it would otherwise go out as a last step it is not)."""
+        self.failed, self.ended, self._ahead = err, True, None
 
     def _begin_next(self) -> None:
         """The next step's stance half, from its plan as it stands now (:meth:`_revise_next_plan`)."""
@@ -301,9 +315,13 @@ class StepwiseWalk:
         step's rows of dynamics.csv are made here too: they read that step alone."""
         if self._ahead is None:
             return None
-        self._ahead = None           # (a step whose swings fail ends the walk: not tried again)
-        with solving():
-            result = self._loop.finish_next()
+        self._ahead = None
+        try:
+            with solving():
+                result = self._loop.finish_next()
+        except Exception as err:
+            self._fail(err)
+            raise
         self.walk.steps.append(result)
         # its rows of dynamics.csv read the step alone (not the plan after it, which may still
         # change the stance leg's rules): final now

@@ -2,13 +2,15 @@
 websocket, one step ahead of what the page shows.
 
 Two tasks per connection: one reads the page's messages (each checked, refused in one line, never
-a crash), one hands out steps. A step is solved in a worker thread only when the page asks for it
-(``{"type": "need", "step": k}``, at most ``ServeLimits.steps_ahead`` beyond the steps sent), which
-it does a little before the step on screen ends: so the steps waiting for a slow page are bounded,
-a page that stops reading stops its own walk and no other, and a change made during a step reaches
-the walk as early as the plan allows (the step solved is the one after the next, docs/serve.md). A closed
-page cancels both tasks; the step being solved, if any, finishes in its thread (a few
-milliseconds) and is dropped with the walk.
+a crash), one hands out steps. A step is made ready in a worker thread only when the page asks for
+it (``{"type": "need", "step": k}``, at most ``ServeLimits.steps_ahead`` beyond the steps sent),
+which it does a little before the step on screen ends: so the steps waiting for a slow page are
+bounded, a page that stops reading stops its own walk and no other, and a change made during a
+step reaches the walk as early as the plan allows (the step solved is the one after the next,
+docs/serve.md). A step's frames need the next step's stance half only; that step's swings are
+solved once the step is sent (:meth:`~klaw_ocp.stepwise.StepwiseWalk.finish_ahead`), so an ask
+waits for less. A closed page cancels both tasks; the step being solved, if any, finishes in its
+thread (a few milliseconds) and is dropped with the walk.
 """
 from __future__ import annotations
 
@@ -139,14 +141,8 @@ class LiveSession:
 
     async def _send_asked(self, live) -> None:
         while live is not None and live is self.live and self.sent < self.asked:
-            try:
-                ready = await asyncio.to_thread(live.next_step)
-            except Exception as err:     # noqa: BLE001 - ConvergenceError, or any fault of one walk
-                live.ended = True
-                words = str(err) if isinstance(err, (ConvergenceError, ConfigError)) else f"{type(err).__name__}: {err}"
-                await self.send({"type": "failed", "message": " ".join(words.split())})
-                return
-            if live is not self.live or ready is None:   # a new walk started meanwhile, or none left
+            ready = await self._solving(live, live.next_step)
+            if live is not self.live or ready is None:   # failed, a new walk started meanwhile, or none left
                 return
             self.sent = ready.index
             planned = live.last_planned
@@ -156,3 +152,16 @@ class LiveSession:
             if live.ended and self.sent == len(live.walk.steps) - 1:
                 await self.send({"type": "ended", "steps": len(live.walk.steps)})
                 return
+            # the next step's swings now, while the page shows the step before this one: its frames
+            # read only its stance half, so the page's next ask waits for less (StepwiseWalk.finish_ahead)
+            await self._solving(live, live.finish_ahead)      # (a failure is said there; next_step then has none)
+
+    async def _solving(self, live, solve):
+        """``solve()`` in a worker thread; a fault ends this walk with one line ("failed"), never the server."""
+        try:
+            return await asyncio.to_thread(solve)
+        except Exception as err:     # noqa: BLE001 - ConvergenceError, or any fault of one walk
+            live.ended = True
+            words = str(err) if isinstance(err, (ConvergenceError, ConfigError)) else f"{type(err).__name__}: {err}"
+            await self.send({"type": "failed", "message": " ".join(words.split())})
+            return None
