@@ -58,7 +58,7 @@ def timed_step(live: StepwiseWalk) -> dict:
     t2 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
     ready = ReadyStep(k, live.walk.steps[k], live._rows.pop(k), frames, t2 - t0, False)     # noqa: SLF001
-    json.dumps(step_message(ready, live.body, live.attributes, {"step": live.last_planned.index}), allow_nan=False)
+    json.dumps(step_message(ready, live.attributes, {"step": live.last_planned.index}), allow_nan=False)
     t3 = time.perf_counter()
     live.finish_ahead()
     t4 = time.perf_counter()

@@ -3,11 +3,13 @@ ahead of the page, parameter changes, refusals that leave the walk going, a sess
 reproduced by `klaw-ocp run` byte for byte, the limits, sessions that end."""
 from __future__ import annotations
 
+import base64
 import contextlib
 import json
 import time
 from collections import deque
 
+import numpy as np
 import pytest
 
 pytest.importorskip("starlette")
@@ -22,11 +24,11 @@ from klaw_ocp.serve.app import create_app  # noqa: E402
 from klaw_ocp.serve.limits import MessageRate, ServeLimits, origin_allowed  # noqa: E402
 
 ORIGIN = {"origin": "http://testserver"}
+WALK = {**DEFAULT_WALK, "walk": {"speed": 5.0, "steps": 1}}
 
 
 def app(**limits):
-    walk = {**DEFAULT_WALK, "walk": {"speed": 5.0, "steps": 1}}
-    return create_app(ExperimentConfig.from_mapping(walk), ServeLimits(**limits))
+    return create_app(ExperimentConfig.from_mapping(WALK), ServeLimits(**limits))
 
 
 class Page:
@@ -91,20 +93,91 @@ def test_the_page_and_its_three_js_are_served_from_the_package(client):
     assert client.get("/info").json()["envelope"]["speed"]["allowed"] == [0.5, 9.0]
 
 
+def float64s(text: str, columns: int) -> np.ndarray:
+    """A step message's base64 frames as the page reads them: little-endian float64s, C order."""
+    return np.frombuffer(base64.b64decode(text, validate=True), dtype="<f8").reshape(-1, columns)
+
+
 def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
+    from klaw_ocp.stepwise import StepwiseWalk
     with open_page(client) as page:
         skeleton = page.receive("skeleton")
         assert len(skeleton["joints"]) == 37
-        first = page.receive("step")
-        points = first["frames"]["points"]
-        assert first["index"] == 0 and first["planned"]["step"] == 2
-        assert len(points) == len(first["frames"]["t"]) and len(points[0]) == 3 * (37 + len(skeleton["end_sites"]))
+        sent = [page.receive("step")]
+        assert sent[0]["index"] == 0 and sent[0]["planned"]["step"] == 2
         page.send({"type": "need", "step": 5})    # no further than the step after those sent
-        assert page.receive("step")["index"] == 1
+        sent.append(page.receive("step"))
+        assert sent[1]["index"] == 1
         page.send({"type": "export"})              # the walk so far, while it walks
         assert page.receive("export")["steps"] == 2
         page.send({"type": "need", "step": 2})
-        assert page.receive("step")["index"] == 2
+        sent.append(page.receive("step"))
+        assert sent[2]["index"] == 2
+    # each frame's root position and 56 angles, the step-wise walk's own to the bit (no joint
+    # positions: the page makes them, static/kinematics.js)
+    live = StepwiseWalk(ExperimentConfig.from_mapping(WALK))
+    for step in sent:
+        ready = live.next_step()
+        frames, n = step["frames"], len(step["frames"]["t"])
+        assert set(frames) == {"t", "root", "angles"} and ready.index == step["index"] and n > 10
+        root, angles = float64s(frames["root"], 3), float64s(frames["angles"], 56)
+        assert root.shape == (n, 3) and angles.shape == (n, 56)
+        assert np.isfinite(root).all() and np.isfinite(angles).all()
+        assert root.tobytes() == np.ascontiguousarray(ready.frames.root, "<f8").tobytes()
+        assert angles.tobytes() == np.ascontiguousarray(ready.frames.angles, "<f8").tobytes()
+        assert frames["t"] == np.round(np.asarray(ready.frames.t, float), 6).tolist()
+
+
+def page_forward_kinematics(skeleton: dict, root: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """The page's forward kinematics (static/kinematics.js) written again from the skeleton message
+    alone, one joint and frame at a time with its own elementary rotations: (n, joints + end sites, 3)."""
+    def rotation(axis: int, a: float) -> np.ndarray:     # about x (0), y (1) or z (2)
+        c, s, r = np.cos(a), np.sin(a), np.eye(3)
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        r[i, i], r[i, j], r[j, i], r[j, j] = c, -s, s, c
+        return r
+
+    parents, offsets = skeleton["parents"], np.array(skeleton["offsets"])
+    out = []
+    for frame_root, frame_angles in zip(root, angles):
+        zxy = np.zeros((len(parents), 3))       # each joint's signed z, x, y angles (slots 0, 1, 2)
+        for a, (joint, slot, sign) in enumerate(zip(skeleton["angle_joint"], skeleton["angle_slot"], skeleton["angle_sign"])):
+            zxy[joint, slot] = sign * frame_angles[a]
+        rotations, positions = [], []
+        for j, parent in enumerate(parents):
+            local = rotation(2, zxy[j, 0]) @ rotation(0, zxy[j, 1]) @ rotation(1, zxy[j, 2])
+            if parent < 0:
+                rotations.append(local)
+                positions.append(frame_root)
+            else:
+                rotations.append(rotations[parent] @ local)
+                positions.append(positions[parent] + rotations[parent] @ offsets[j])
+        ends = [positions[j] + rotations[j] @ np.array(o) for j, o in zip(skeleton["end_sites"], skeleton["end_site_offsets"])]
+        out.append(positions + ends)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("height", [1.8, 1.2])
+def test_the_skeleton_message_carries_the_bodys_forward_kinematics(height):
+    """The page's forward kinematics from the skeleton message (as JSON carries it) places every
+    joint and end site where the server's does, at angles far from a walk's in every slot."""
+    from klaw_ocp.body import Body
+    from klaw_ocp.body_motion.skeleton import END_SITES, forward_kinematics, rest_root_position
+    from klaw_ocp.serve.protocol import skeleton_message
+    body = Body(height, 60.0)
+    skeleton = json.loads(json.dumps(skeleton_message(body)))
+    assert len(skeleton["offsets"]) == 37 and len(skeleton["end_site_offsets"]) == len(skeleton["end_sites"])
+    assert len(skeleton["angle_joint"]) == len(skeleton["angle_slot"]) == len(skeleton["angle_sign"]) == 56
+    rng = np.random.default_rng(7)
+    root = rest_root_position(body) + rng.uniform(-0.5, 0.5, (6, 3))
+    angles = rng.uniform(-1.2, 1.2, (6, 56))
+    angles[0] = 0.0                          # the rest pose
+    server = forward_kinematics(body, root, angles)
+    expected = np.concatenate([server.positions] + [server.end_sites[n][:, None] for n in END_SITES], axis=1)
+    page = page_forward_kinematics(skeleton, root, angles)
+    assert page.shape == (6, 37 + len(END_SITES), 3)
+    assert np.abs(page - expected).max() < 1e-12
+    assert page[0, :, 1].min() == pytest.approx(root[0, 1] - rest_root_position(body)[1], abs=1e-12)   # soles at y = 0
 
 
 def test_a_speed_change_reaches_the_walk_ramped_and_a_refusal_leaves_it_walking(client):

@@ -140,6 +140,55 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
     _not_blank(shot)
 
 
+def test_the_page_places_the_joints_as_the_servers_forward_kinematics(browser):
+    """The page makes each frame's joint and end-site positions from the step's root and angles
+    (static/kinematics.js): those of a step it received, and of poses far from a walk's for another
+    body, are the server's (klaw_ocp.body_motion.skeleton.forward_kinematics) to 1e-9 m."""
+    import base64
+
+    import numpy as np
+
+    from klaw_ocp.body import Body
+    from klaw_ocp.body_motion.skeleton import END_SITES, forward_kinematics, rest_root_position
+    from klaw_ocp.commands.serve import DEFAULT_WALK
+    from klaw_ocp.config import ExperimentConfig
+    from klaw_ocp.serve.app import create_app
+    from klaw_ocp.serve.protocol import skeleton_message
+
+    def server_points(body, root, angles):
+        s = forward_kinematics(body, root, angles)
+        return np.concatenate([s.positions] + [s.end_sites[n][:, None] for n in END_SITES], axis=1).reshape(len(root), -1)
+
+    def float64s(text, columns):
+        return np.frombuffer(base64.b64decode(text), dtype="<f8").reshape(-1, columns)
+
+    app = create_app(ExperimentConfig.from_mapping({**DEFAULT_WALK, "walk": {"speed": 5.0, "steps": 1}}))
+    with running_server(app) as url:
+        browser.get(url + "/")
+        wait_for(browser, "return window.klaw && window.klaw.shown.length >= 2")
+        step = browser.execute_script("""const m = window.klaw.last_step;
+            return {index: m.index, root: m.frames.root, angles: m.frames.angles,
+                    points: m.frames.points.map((p) => Array.from(p))};""")
+        root, angles = float64s(step["root"], 3), float64s(step["angles"], 56)
+        page = np.array(step["points"])
+        expected = server_points(Body(**DEFAULT_WALK["body"]), root, angles)
+        assert len(root) > 10 and page.shape == expected.shape == (len(root), 3 * (37 + len(END_SITES)))
+        print(f"step {step['index']}: the page's joints within {np.abs(page - expected).max():.1e} m of the server's")
+        assert np.abs(page - expected).max() < 1e-9
+        # another body, every angle far from the walk's (up to 1.4 rad) and the root anywhere
+        body = Body(1.5, 50.0)
+        rng = np.random.default_rng(3)
+        root = rest_root_position(body) + rng.uniform(-2, 2, (5, 3))
+        angles = rng.uniform(-1.4, 1.4, (5, 56))
+        frames = {name: base64.b64encode(np.ascontiguousarray(a, "<f8").tobytes()).decode("ascii")
+                  for name, a in (("root", root), ("angles", angles))}
+        page = np.array(browser.execute_script(
+            "return window.klawForwardKinematics(arguments[0], arguments[1]).map((p) => Array.from(p));",
+            skeleton_message(body), frames))
+        expected = server_points(body, root, angles)
+        assert page.shape == expected.shape and np.abs(page - expected).max() < 1e-9
+
+
 def _not_blank(path: Path) -> None:
     from PIL import Image
     image = Image.open(path).convert("RGB")

@@ -351,6 +351,16 @@ def _fk_offsets(body: Body) -> tuple[np.ndarray, np.ndarray]:
     return offsets, carried
 
 
+def kinematic_tables(body: Body) -> dict:
+    """What :func:`forward_kinematics` reads besides a frame's root and angles, for another
+    implementation of it (the playground page's): each joint's rest offset from its parent (37, 3;
+    the root's zero), each end site's from its joint (END_SITES order), and each of the 56 angles'
+    joint, slot in the joint's Z, X, Y order (0, 1, 2) and sign."""
+    offsets, carried = _fk_offsets(body)
+    return {"offsets": offsets, "end_site_offsets": carried[:len(END_SITES)], "angle_joint": _ANGLE_JOINT,
+            "angle_slot": _ANGLE_SLOT, "angle_sign": _ANGLE_SIGN}
+
+
 def forward_kinematics(body: Body, root_position: np.ndarray, angles: np.ndarray) -> SkeletonFrames:
     """World joint positions and rotations from the pelvis centre shape (n, 3) and the angles
     shape (n, 56) (rad)."""

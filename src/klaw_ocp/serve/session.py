@@ -146,7 +146,7 @@ class LiveSession:
                 return
             self.sent = ready.index
             planned = live.last_planned
-            await self.send(step_message(ready, live.body, live.attributes,
+            await self.send(step_message(ready, live.attributes,
                                          {"step": planned.index, "step_frequency": planned.parameters.step_frequency_spm,
                                           "speed": planned.parameters.speed_kmh}))
             if live.ended and self.sent == len(live.walk.steps) - 1:

@@ -3,6 +3,7 @@
 // (needBeforeEnd: a few times the server's recent delivery time): the next step is ready in time,
 // and a change made before then reaches the walk one step earlier than if it were asked for at
 // the start of the step (docs/serve.md).
+import { framePoints } from "./kinematics.js";
 import { Scene } from "./scene.js";
 import { Strips } from "./strips.js";
 
@@ -23,9 +24,11 @@ const SEND_EVERY_MS = 150;     // a dragged slider sends at most this often (the
 const ATTRIBUTE_LABELS = { pelvic_list: "pelvic list", pelvic_rotation: "pelvic rotation",
                            arm_swing_amplitude: "arm swing", toe_clearance: "toe clearance" };
 
-// what the browser test reads: the steps shown, each with its cadence
+// what the browser test reads: the steps shown, each with its cadence, the last step received
+// (with the points the page made of it), and the page's forward kinematics
 const state = window.klaw = { shown: [], planned: [], ended: false, connected: false, refusals: [], accepted: null };
-let socket, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false, asked = 0;
+window.klawForwardKinematics = framePoints;
+let socket, skeleton = null, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false, asked = 0;
 
 function send(message) {
   if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(message));
@@ -144,15 +147,16 @@ function connect() {
 
 function receive(m) {
   if (m.type === "skeleton") {
-    scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0; askedAt = null;
+    skeleton = m; scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0; askedAt = null;
     walkEnded = false; state.ended = false; state.shown = []; state.planned = [];
     clearRefusals();
     $("download-bvh").disabled = $("download-config").disabled = true;
     $("status").textContent = `walking (${m.method}${m.start_from_rest ? ", from rest" : ""})`;
   } else if (m.type === "step") {
-    // the joint positions come in whole millimetres (integers are the cheapest JSON to write)
-    m.frames.points = m.frames.points.map((frame) => frame.map((mm) => mm / 1000));
-    steps.set(m.index, m);
+    // each frame's root position and 56 angles, exactly (base64 of float64s): the joints' and end
+    // sites' positions made here, as the server's forward kinematics makes them (kinematics.js)
+    m.frames.points = framePoints(skeleton, m.frames);
+    steps.set(m.index, m); state.last_step = m;
     if (askedAt !== null && m.index === asked) {      // (steps 0 and 1 come unasked)
       deliveries = [...deliveries, (performance.now() - askedAt) / 1000].slice(-NEED_HISTORY);
       askedAt = null;
