@@ -215,7 +215,8 @@ class StepController:
         """The step's other stages from its stance half: the stance leg's heel-off, the hind leg
         over the double support to toe-off, curve P and the swing foot, the swing context, the
         three swings (solved), the heel's clearance before it strikes."""
-        b, plan, inp, index, stance = self.body, stage.plan, stage.inp, stage.index, stage.stance
+        b, plan, inp, index, stance, stance_ctx = self.body, stage.plan, stage.inp, stage.index, stage.stance, \
+            stage.stance_ctx
         t, a, pelvis, other_hips, other_vels = plan.timings, plan.attributes, stage.pelvis, stage.other_hips, \
             stage.other_vels
         stance_foot = stage.landing_foot.find_heel_off(stance.t, stage.stance_hips)
@@ -229,7 +230,7 @@ class StepController:
             a_r = a if retraction_deg == a.terminal_swing_retraction else \
                 a.with_overrides({"terminal_swing_retraction": retraction_deg})
             curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
-            c = swing_context(b, a_r, self.gains, plan, stage.stance_ctx, stance.parameters, origin, curve, pelvis)
+            c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
             return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
         # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the ankle would
         # pass lower than l9 (control/swing_clearance.py); a closing step's thigh comes in from behind (thigh_peak)
@@ -237,7 +238,6 @@ class StepController:
             (swings_with(a.terminal_swing_retraction), math.degrees(plan.constraints.theta3 - thigh_peak(a, plan.constraints)))
             if stage.at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction, self.retraction_hint))
         self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
-        stance_ctx = stage.stance_ctx
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
                           t_start=plan.t_start, subphases=[stance, *swings],
                           double_support=ds.as_dict(), curve_p=curve.as_dict(),
