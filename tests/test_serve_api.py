@@ -262,6 +262,29 @@ def test_a_step_that_does_not_converge_ends_its_walk_in_one_line_and_a_new_one_w
         assert page.receive("step")["index"] == 0
 
 
+def test_swings_that_fail_after_their_step_was_sent_end_the_walk_once(client, monkeypatch):
+    """The server solves the next step's swings after sending a step (StepwiseWalk.finish_ahead):
+    where they fail, the page hears it once, after the steps already sent, and gets no more."""
+    from klaw_ocp.control.step import StepController
+    from klaw_ocp.errors import ConvergenceError
+    original = StepController.solve_swing_stage
+
+    def failing(self, stage):
+        if stage.index == 3:
+            raise ConvergenceError(3, "swing1", 2e-3, "forced for the test")
+        return original(self, stage)
+    monkeypatch.setattr(StepController, "solve_swing_stage", failing)
+    with open_page(client) as page:
+        assert [s["index"] for s in page.walk(3)] == [0, 1, 2]     # step 2 went out with step 3's stance half
+        failed = page.receive("failed")
+        assert "step 3" in failed["message"] and "swing1" in failed["message"]
+        page.send({"type": "need", "step": 3})
+        page.send({"type": "start", "settings": {}})
+        # nothing of the failed walk comes after (no step 3, no second "failed", no "ended")
+        assert json.loads(page.ws.receive_text())["type"] == "skeleton"
+        assert page.receive("step")["index"] == 0
+
+
 def test_a_new_walk_with_other_settings_replaces_the_old_one(client, monkeypatch):
     from klaw_ocp.serve import session
 
