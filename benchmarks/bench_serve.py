@@ -5,11 +5,12 @@
 1. The natural walk (5 km/h, 1.8 m, 80 kg, multiple shooting), ``--steps`` steps after five warm-up
    steps: for each, the time from asking for it to its message ready to send, as the server does
    it (:meth:`klaw_ocp.stepwise.StepwiseWalk.next_step`: the next step's stance half solved and this
-   step's body frames on their window, then :func:`klaw_ocp.serve.protocol.step_message` and
-   ``json.dumps``), split into those parts; then what the server does after sending it, while the
-   page shows the step before (the rest of the next step: its swings and its rows of dynamics.csv,
-   :meth:`~klaw_ocp.stepwise.StepwiseWalk.finish_ahead`), and the step's whole work (the sum). p50
-   and p99 of each.
+   step's body frames on their window, then :func:`klaw_ocp.serve.protocol.step_text`, the message's
+   JSON), split into those parts; then what the server does after sending it, while the page shows
+   the step before (the rest of the next step: its swings and its rows of dynamics.csv,
+   :meth:`~klaw_ocp.stepwise.StepwiseWalk.finish_ahead`, and its strips' JSON,
+   :func:`~klaw_ocp.serve.protocol.strips_text`), and the step's whole work (the sum). p50 and p99
+   of each.
 2. How far ahead the next step is ready, at speeds across the envelope (0.5 to 9 km/h at eq. 1's
    natural step, in both solver modes): the step's duration over the time from asking for the next
    step to its message (a step is asked for as the one before begins, at the latest 0.25 s before
@@ -34,7 +35,7 @@ import time
 import numpy as np
 
 from klaw_ocp.config import ExperimentConfig
-from klaw_ocp.serve.protocol import step_message
+from klaw_ocp.serve.protocol import step_text, strips_text
 from klaw_ocp.solvers.thread_safety import solving
 from klaw_ocp.stepwise import ReadyStep, StepwiseWalk, step_frames
 
@@ -60,13 +61,18 @@ def timed_step(live: StepwiseWalk) -> dict:
     t2 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
     ready = ReadyStep(k, live.walk.steps[k], live._rows.pop(k), frames, t2 - t0, False)     # noqa: SLF001
-    json.dumps(step_message(ready, live.attributes, {"step": live.last_planned.index}), allow_nan=False)
+    step_text(ready, live.attributes, {"step": live.last_planned.index}, STRIPS.pop(k, None))
     t3 = time.perf_counter()
-    live.finish_ahead()
+    result = live.finish_ahead()
+    if result is not None:                         # its strips' text, as the server writes it then
+        STRIPS[result.index] = strips_text(live.rows(result.index))
     t4 = time.perf_counter()
     return {"stance": t1 - t0, "frames": t2 - t1, "message": t3 - t2, "ready": t3 - t0,
             "rest": t4 - t3, "work": t4 - t0, "t_step": live.walk.steps[k].plan.timings.t_step}
 
+
+#: each solved step's strips' JSON until its message is made (the server's LiveSession.strips)
+STRIPS: dict = {}
 
 PARTS = {"ready": "ready to send (asked -> message)", "stance": "  the next step's stance half",
          "frames": "  this step's frames", "message": "  its message (JSON)",
@@ -76,7 +82,8 @@ PARTS = {"ready": "ready to send (asked -> message)", "stance": "  the next step
 def warm(live: StepwiseWalk, steps: int) -> None:
     for _ in range(steps):
         live.next_step()
-    live.finish_ahead()
+    result = live.finish_ahead()
+    STRIPS[result.index] = strips_text(live.rows(result.index))
 
 
 def natural(steps: int) -> dict:

@@ -22,6 +22,7 @@ from klaw_ocp.commands.serve import DEFAULT_WALK  # noqa: E402
 from klaw_ocp.config import ExperimentConfig  # noqa: E402
 from klaw_ocp.serve.app import create_app  # noqa: E402
 from klaw_ocp.serve.limits import MessageRate, ServeLimits, origin_allowed  # noqa: E402
+from klaw_ocp.serve.protocol import STRIP_COLUMNS, step_text, strips_text  # noqa: E402
 
 ORIGIN = {"origin": "http://testserver"}
 WALK = {**DEFAULT_WALK, "walk": {"speed": 5.0, "steps": 1}}
@@ -126,6 +127,11 @@ def test_steps_stream_one_ahead_of_the_page_with_the_bodys_frames(client):
         assert root.tobytes() == np.ascontiguousarray(ready.frames.root, "<f8").tobytes()
         assert angles.tobytes() == np.ascontiguousarray(ready.frames.angles, "<f8").tobytes()
         assert frames["t"] == np.round(np.asarray(ready.frames.t, float), 6).tolist()
+        # the strips, which the server writes once the step is solved whole, spliced into the message
+        strips = strips_text(ready.dynamics)
+        assert step["dynamics"] == json.loads(strips) and set(step["dynamics"]) == {*STRIP_COLUMNS, "subphase"}
+        text = step_text(ready, live.attributes, step["planned"], strips)
+        assert text == step_text(ready, live.attributes, step["planned"]) and json.loads(text)["dynamics"] == step["dynamics"]
 
 
 def page_forward_kinematics(skeleton: dict, root: np.ndarray, angles: np.ndarray) -> np.ndarray:

@@ -328,6 +328,11 @@ class StepwiseWalk:
         self._rows[result.index] = step_table(result, self.body)
         return result
 
+    def rows(self, k: int) -> dict:
+        """Step k's rows of dynamics.csv, made when it was solved whole, until it is handed out
+        (then they are its :class:`ReadyStep`'s ``dynamics``)."""
+        return self._rows[k]
+
     @property
     def last_planned(self):
         """The plan made last (:class:`~klaw_ocp.gait.StepPlan`): the step the next change can reach

@@ -163,17 +163,26 @@ def _float64s(values) -> str:
     return base64.b64encode(np.ascontiguousarray(values, "<f8").tobytes()).decode("ascii")
 
 
-def step_message(ready, attrs, planned) -> dict:
-    """A step for the page: its parameters and timings, each frame's root position (n, 3) and 56
-    angles (n, 56) exactly (:func:`_float64s`; the page makes the joints' positions from them:
-    forward kinematics here and the positions' JSON made the message 0.64 ms, now 0.20 ms,
-    docs/serve.md), its rows of dynamics.csv for the strips, its subphases."""
-    result, frames, table = ready.result, ready.frames, ready.dynamics
+def strips_text(table) -> str:
+    """A step's rows of dynamics.csv for the page's strips (STRIP_COLUMNS and the subphase), as the
+    JSON text of a step message's ``dynamics``: they read that step alone, so the server writes them
+    once the step is solved whole, before the page asks for it (:func:`step_text`)."""
+    return json.dumps({**_finite_columns(table, STRIP_COLUMNS, 4),
+                       "subphase": np.asarray(table["subphase"]).astype(str).tolist()}, allow_nan=False)
+
+
+def step_text(ready, attrs, planned, strips: str | None = None) -> str:
+    """A step for the page, as the JSON text sent: its parameters and timings, each frame's root
+    position (n, 3) and 56 angles (n, 56) exactly (:func:`_float64s`; the page makes the joints'
+    positions from them: forward kinematics here and the positions' JSON made the message 0.64 ms,
+    0.20 ms without, docs/serve.md), its subphases, and its rows of dynamics.csv for the strips
+    (``strips``: :func:`strips_text` of them when the caller wrote it already)."""
+    result, frames = ready.result, ready.frames
     plan = result.plan
     subphases = [[s.name, result.t_start + float(s.t[0]), result.t_start + float(s.t[-1])] for s in result.subphases]
     half = attrs.foot_lateral_distance / 2
     side = stance_leg(ready.index)
-    return {
+    message = json.dumps({
         "type": "step", "index": ready.index, "closing": ready.closing, "stance_leg": side,
         "t_start": plan.t_start, "t_step": plan.timings.t_step, "t_ds": plan.timings.t_ds,
         "speed": plan.parameters.speed_kmh, "step_length": plan.parameters.step_length_m,
@@ -182,7 +191,7 @@ def step_message(ready, attrs, planned) -> dict:
         "attributes": {name: plan.attributes.get(name) for name in STEP_ATTRIBUTES},
         "foot": {"x": result.origin_x, "z": half if side == "right" else -half},
         "frames": {"t": _finite(frames.t, 6), "root": _float64s(frames.root), "angles": _float64s(frames.angles)},
-        "dynamics": {**_finite_columns(table, STRIP_COLUMNS, 4),
-                     "subphase": np.asarray(table["subphase"]).astype(str).tolist()},
         "subphases": subphases, "solve_ms": round(ready.solve_s * 1000, 2), "planned": planned,
-    }
+    }, allow_nan=False)
+    # the strips' text after the rest: a JSON object's text ends with its closing brace
+    return f'{message[:-1]}, "dynamics": {strips_text(ready.dynamics) if strips is None else strips}}}'

@@ -25,7 +25,7 @@ from ..result_files.bvh import bvh_text
 from ..body_motion import body_motion
 from ..stepwise import StepwiseWalk
 from .limits import MessageRate, ServeLimits
-from .protocol import Refused, apply_settings, parse, skeleton_message, step_message
+from .protocol import Refused, apply_settings, parse, skeleton_message, step_text, strips_text
 
 
 class LiveSession:
@@ -37,6 +37,7 @@ class LiveSession:
         self.live: StepwiseWalk | None = None
         self.asked = 0               # the last step the page asked for (step 0 it needs at once)
         self.sent = -1               # the last step sent
+        self.strips: dict = {}       # step -> its strips' JSON, written once it was solved whole
         self.wake = asyncio.Event()  # something changed: the sender looks again
         self.send_lock = asyncio.Lock()
 
@@ -105,7 +106,7 @@ class LiveSession:
         """A new walk with ``settings``; refused (the old walk going on) if they are not a walk."""
         config = ExperimentConfig.from_mapping(apply_settings(self.base, settings))
         live = await asyncio.to_thread(StepwiseWalk, config)
-        self.live, self.asked, self.sent = live, 0, -1
+        self.live, self.asked, self.sent, self.strips = live, 0, -1, {}
         await self.send({**skeleton_message(live.body), "fps": live.spec.fps, "method": live.spec.method,
                          "start_from_rest": live.spec.start_from_rest})
         self.wake.set()
@@ -146,15 +147,25 @@ class LiveSession:
                 return
             self.sent = ready.index
             planned = live.last_planned
-            await self.send(step_message(ready, live.attributes,
-                                         {"step": planned.index, "step_frequency": planned.parameters.step_frequency_spm,
-                                          "speed": planned.parameters.speed_kmh}))
+            async with self.send_lock:
+                await self.ws.send_text(step_text(ready, live.attributes,
+                                                  {"step": planned.index, "step_frequency": planned.parameters.step_frequency_spm,
+                                                   "speed": planned.parameters.speed_kmh}, self.strips.pop(ready.index, None)))
             if live.ended and self.sent == len(live.walk.steps) - 1:
                 await self.send({"type": "ended", "steps": len(live.walk.steps)})
                 return
-            # the next step's swings now, while the page shows the step before this one: its frames
-            # read only its stance half, so the page's next ask waits for less (StepwiseWalk.finish_ahead)
-            await self._solving(live, live.finish_ahead)      # (a failure is said there; next_step then has none)
+            # the rest of the next step now, while the page shows the step before this one (its frames
+            # read only its stance half: StepwiseWalk.finish_ahead), and its strips' text: the page's
+            # next ask waits for less (a failure is said in _solving; next_step then has none)
+            finished = await self._solving(live, lambda: self._finish_ahead(live))
+            if finished is not None and live is self.live:
+                self.strips[finished[0]] = finished[1]
+
+    @staticmethod
+    def _finish_ahead(live) -> tuple | None:
+        """The rest of the next step, and its strips' JSON (in the worker thread)."""
+        result = live.finish_ahead()
+        return None if result is None else (result.index, strips_text(live.rows(result.index)))
 
     async def _solving(self, live, solve):
         """``solve()`` in a worker thread; a fault ends this walk with one line ("failed"), never the server."""
