@@ -8,10 +8,10 @@ plain function of what the stage before it handed on:
 1. :func:`stance_leg_rules`: the virtual leg's rules of the stance leg (§4.2) from its own stance:
    its heel-strike foot (:func:`landing_stance_foot`) and its heel-off; the next step's double
    support completes them (stage 2 of that step);
-2. :func:`hind_leg_double_support`: the hind leg's virtual leg carried through the double support
-   to toe-off, where swing1 starts from its posture ("the continuing stance phase of the hind leg
-   is completed kinematically", §3): its rules completed (:func:`completed_hind_leg`), then the leg
-   there (:func:`double_support`);
+2. the hind leg's virtual leg carried through the double support to toe-off, where swing1 starts
+   from its posture ("the continuing stance phase of the hind leg is completed kinematically",
+   §3): its rules completed (:func:`completed_hind_leg`), then the leg there
+   (:func:`double_support`);
 3. :func:`plan_curve_p`: curve P, the ankle path of swing1, from the toe-off ankle to the ankle
    with the toe under the knee at t1, and the swing foot's angle schedule;
 4. :func:`swing_context`: the numbers the swing models read (the stance context, the solved stance
@@ -177,7 +177,7 @@ def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x
     """The virtual leg's rules for the stance leg of a step (§4.2), from its solved ``stance`` and
     the world hips at its nodes ``hips``: its heel-strike foot (:func:`landing_stance_foot`), its
     heel-off from the stance's hips. The next step's double support completes them
-    (:func:`hind_leg_double_support`)."""
+    (:func:`completed_hind_leg`)."""
     return landing_stance_foot(body, attrs, plan, stance, hips, origin_x, standing, next_t_ds).find_heel_off(stance.t, hips)
 
 
@@ -195,14 +195,6 @@ def landing_stance_foot(body: Body, attrs, plan, stance, hips: np.ndarray, origi
         return StanceFoot.standing(body, attrs, origin_x, t_step, t_ds_next)
     _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
     return StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity, t_ds_next)
-
-
-def hind_leg_double_support(attrs, plan, stance, hips: np.ndarray, hip_vels: np.ndarray,
-                            hind: StanceFoot) -> DoubleSupport:
-    """The previous stance's virtual leg goes on through this step's double support in the same
-    foot periods, to toe-off, where swing1 starts from it (kinematics.virtual_leg): its rules
-    completed (:func:`completed_hind_leg`), then the leg there (:func:`double_support`)."""
-    return double_support(plan, stance, hips, hip_vels, completed_hind_leg(attrs, plan, stance, hips, hind))
 
 
 def completed_hind_leg(attrs, plan, stance, hips: np.ndarray, hind: StanceFoot) -> StanceFoot:
