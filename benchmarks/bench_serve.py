@@ -47,11 +47,12 @@ def config(speed: float, method: str = "multiple-shooting") -> ExperimentConfig:
                                           "walk": {"speed": speed, "steps": 1}, "solver": {"method": method}})
 
 
-def timed_step(live: StepwiseWalk) -> dict:
+def timed_step(live: StepwiseWalk, strips: dict) -> dict:
     """One step made ready as StepwiseWalk.next_step makes it, each part timed (s): the next step's
-    stance half, this step's frames and its message; then, after it is sent, the rest of the next
-    step (its swings and its rows of dynamics.csv: StepwiseWalk.finish_ahead, as the server calls it
-    while the page shows the step before)."""
+    stance half, this step's frames and its message (its strips' JSON from ``strips``, written
+    before); then, after it is sent, the rest of the next step (its swings and its rows of
+    dynamics.csv: StepwiseWalk.finish_ahead, as the server calls it while the page shows the step
+    before) and its strips' JSON, into ``strips``."""
     k = live._shown                                # noqa: SLF001 - the parts of next_step, timed
     t0 = time.perf_counter()
     with solving():
@@ -61,35 +62,34 @@ def timed_step(live: StepwiseWalk) -> dict:
     t2 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
     ready = ReadyStep(k, live.walk.steps[k], live._rows.pop(k), frames, t2 - t0, False)     # noqa: SLF001
-    step_text(ready, live.attributes, {"step": live.last_planned.index}, STRIPS.pop(k, None))
+    step_text(ready, live.attributes, {"step": live.last_planned.index}, strips.pop(k, None))
     t3 = time.perf_counter()
     result = live.finish_ahead()
     if result is not None:                         # its strips' text, as the server writes it then
-        STRIPS[result.index] = strips_text(live.rows(result.index))
+        strips[result.index] = strips_text(live.rows(result.index))
     t4 = time.perf_counter()
     return {"stance": t1 - t0, "frames": t2 - t1, "message": t3 - t2, "ready": t3 - t0,
             "rest": t4 - t3, "work": t4 - t0, "t_step": live.walk.steps[k].plan.timings.t_step}
 
-
-#: each solved step's strips' JSON until its message is made (the server's LiveSession.strips)
-STRIPS: dict = {}
 
 PARTS = {"ready": "ready to send (asked -> message)", "stance": "  the next step's stance half",
          "frames": "  this step's frames", "message": "  its message (JSON)",
          "rest": "after sending: next step's rest", "work": "the whole step's work"}
 
 
-def warm(live: StepwiseWalk, steps: int) -> None:
+def warm(live: StepwiseWalk, steps: int) -> dict:
+    """Hand out ``steps`` steps, solve the rest of the next one; returns the walk's strips' JSON by
+    step (the server's ``LiveSession.strips``), for :func:`timed_step`."""
     for _ in range(steps):
         live.next_step()
     result = live.finish_ahead()
-    STRIPS[result.index] = strips_text(live.rows(result.index))
+    return {result.index: strips_text(live.rows(result.index))}
 
 
 def natural(steps: int) -> dict:
     live = StepwiseWalk(config(5.0))
-    warm(live, 5)
-    rows = [timed_step(live) for _ in range(steps)]
+    strips = warm(live, 5)
+    rows = [timed_step(live, strips) for _ in range(steps)]
     out = {}
     for part in PARTS:
         ms = np.array([r[part] for r in rows]) * 1000
@@ -102,8 +102,8 @@ def ahead(speed: float, method: str, steps: int = 12) -> tuple[float, float]:
     message (what the page waits for), and to the whole work of that step (with its swings and
     rows, solved after sending)."""
     live = StepwiseWalk(config(speed, method))
-    warm(live, 1)
-    rows = [timed_step(live) for _ in range(steps)]
+    strips = warm(live, 1)
+    rows = [timed_step(live, strips) for _ in range(steps)]
     return min(r["t_step"] / r["ready"] for r in rows), min(r["t_step"] / r["work"] for r in rows)
 
 

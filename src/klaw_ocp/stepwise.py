@@ -277,18 +277,14 @@ class StepwiseWalk:
         k = self._shown
         if self.failed is not None:
             return None
-        try:
+        self.finish_ahead()
+        while not self.ended and len(self.walk.steps) <= k:
+            self._begin_next()
             self.finish_ahead()
-            while not self.ended and len(self.walk.steps) <= k:
-                self._begin_next()
-                self.finish_ahead()
-            if k >= len(self.walk.steps):
-                return None
-            if not self.ended and len(self.walk.steps) == k + 1:
-                self._begin_next()
-        except Exception as err:
-            self._fail(err)
-            raise
+        if k >= len(self.walk.steps):
+            return None
+        if not self.ended and len(self.walk.steps) == k + 1:
+            self._begin_next()
         frames = step_frames(self.walk, k, self.spec.fps, self._ahead)
         result = self.walk.steps[k]
         self._shown += 1
@@ -301,9 +297,13 @@ class StepwiseWalk:
 
     def _begin_next(self) -> None:
         """The next step's stance half, from its plan as it stands now (:meth:`_revise_next_plan`)."""
-        self._revise_next_plan()
-        with solving():
-            self._ahead = self._loop.begin_next()
+        try:
+            self._revise_next_plan()
+            with solving():
+                self._ahead = self._loop.begin_next()
+        except Exception as err:
+            self._fail(err)
+            raise
         if self._ahead is None:
             self.ended = True
 

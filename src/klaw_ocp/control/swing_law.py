@@ -216,9 +216,8 @@ def closing_swing2_torques(x, t, u, c):
     With the thigh on its reference and moving with it at t2 (:func:`closing_swing2_final`),
     swing3's moment has next to nothing left to do."""
     n = names(c)
-    target, target_rate = thigh_reference(t, c)
     s = (t - n.swing2_start) / (n.foot_t2 - n.swing2_start)
-    f3 = spring_damper(x[6], x[8] - target_rate, n.k_h, n.d_h, target) + s * (u[1] + u[3] * s)
+    f3 = _hold(x[6], x[8], t, c, 0) + s * (u[1] + u[3] * s)
     return f3, decaying_exponential_about_mean(t, n.swing2_start, n.tau4, n.exp4_mean, u[0], u[2])
 
 

@@ -174,9 +174,8 @@ def strips_text(table) -> str:
 def step_text(ready, attrs, planned, strips: str | None = None) -> str:
     """A step for the page, as the JSON text sent: its parameters and timings, each frame's root
     position (n, 3) and 56 angles (n, 56) exactly (:func:`_float64s`; the page makes the joints'
-    positions from them: forward kinematics here and the positions' JSON made the message 0.64 ms,
-    0.20 ms without, docs/serve.md), its subphases, and its rows of dynamics.csv for the strips
-    (``strips``: :func:`strips_text` of them when the caller wrote it already)."""
+    positions from them, static/kinematics.js), its subphases, and its rows of dynamics.csv for
+    the strips (``strips``: :func:`strips_text` of them when the caller wrote it already)."""
     result, frames = ready.result, ready.frames
     plan = result.plan
     subphases = [[s.name, result.t_start + float(s.t[0]), result.t_start + float(s.t[-1])] for s in result.subphases]

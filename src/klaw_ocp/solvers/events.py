@@ -8,7 +8,6 @@ map) is applied there, and the integration goes on with the switched context.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from scipy.optimize import minimize_scalar
