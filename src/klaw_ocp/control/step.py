@@ -115,6 +115,8 @@ class StepController:
         prepare_kernels(solver, lock_rule)
         self.guesses: dict = {}
         self.previous_states: dict = {}
+        #: the last repaired solution of each subphase (multiple shooting's IPOPT repair)
+        self.repairs: dict = {}
         #: the thigh retraction the last step needed (deg), the next step's first try
         self.retraction_hint: float | None = None
         torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1
@@ -140,7 +142,9 @@ class StepController:
 
     def _solve(self, step: int, problem: SubphaseProblem, remember: bool = True) -> SubphaseSolution:
         """Solve; raise ConvergenceError on failure; keep the parameters and, for an optimised
-        problem, the node states to start the next step from."""
+        problem, the node states to start the next step from; for a repaired one (IPOPT's
+        multipliers with it), the whole solution, from which the next step's repair starts."""
+        problem.repair_start = self.repairs.get(problem.spec.name)
         solution = self.solver.solve(problem)
         if not solution.success:
             raise ConvergenceError(step, problem.spec.solution_name, solution.residual, solution.message,
@@ -151,6 +155,10 @@ class StepController:
             self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
             if problem.optimize:
                 self.previous_states[problem.spec.name] = solution.states
+            if solution.multipliers is not None:
+                self.repairs[problem.spec.name] = solution
+            else:                  # a step that needed no repair: the next one's is not like it
+                self.repairs.pop(problem.spec.name, None)
         return solution
 
     def _guess(self, name: str, nu: int) -> np.ndarray:

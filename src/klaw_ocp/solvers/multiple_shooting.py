@@ -260,11 +260,28 @@ class MultipleShootingSolver:
         result = self._finish(pb, xs, u, iterations, call, "", True, kernels)
         return result if result.success else None
 
-    def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
+    def _repair_start(self, pb: SubphaseProblem) -> SubphaseSolution | None:
+        """The problem's ``repair_start`` when it is a repair of the same formulation on this grid
+        (its nodes, unknowns and multipliers fit this NLP), else None."""
+        prev, spec, n = pb.repair_start, pb.spec, self.intervals
+        if prev is None or prev.multipliers is None or np.shape(prev.states) != (n + 1, spec.nx):
+            return None
+        if list(prev.parameters) != list(spec.unknown_names) or not np.isfinite(prev.states).all():
+            return None
+        return prev
+
+    def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None,
+                     previous: SubphaseSolution | None = None) -> SubphaseSolution:
+        """IPOPT on the NLP from ``previous`` (the step before's repair, with its multipliers: the
+        warm solver from its first pass), else from ``start`` (the square solution) or a simulation."""
         spec, n = pb.spec, self.intervals
         kernels = self._kernels(pb, call)
         solver = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations)
-        if start is not None and np.isfinite(start.states).all():
+        sol = None
+        if previous is not None:
+            u0, xs0 = np.array([previous.parameters[k] for k in spec.unknown_names]), previous.states[1:]
+            sol = {"lam_g": previous.multipliers[0], "lam_x": previous.multipliers[1]}
+        elif start is not None and np.isfinite(start.states).all():
             u0, xs0 = np.array([start.parameters[k] for k in spec.unknown_names]), start.states[1:]
         else:
             u0, xs0, _ = self._initial_guess(pb, [], call, kernels)
@@ -273,7 +290,7 @@ class MultipleShootingSolver:
         weights = np.array([1.0 if f and spec.residuals is None else 0.0 for f in pb.fixed])
         params = np.concatenate([pb.x0, pb.grid, pb.context, pb.guess, pb.scale, weights])
         n_eq = n * spec.nx + spec.final.size1_out(0)
-        iterations, active, result, sol = 0, None, None, None
+        iterations, active, result = 0, None, None
         for _ in range(4):
             lower = path_bounds(pb, pb.grid, np.vstack([pb.x0, z0[: n * spec.nx].reshape(n, spec.nx)]))
             if lower is None:
@@ -286,7 +303,7 @@ class MultipleShootingSolver:
                 lbg = np.concatenate([lbg, lower.T.ravel()])
                 ubg = np.concatenate([ubg, np.full(lower.size, np.inf)])
             with IPOPT_LOCK:   # one IPOPT at a time, and these statistics this solve's (.thread_safety)
-                if sol is not None:      # a later pass: from the last one's solution and multipliers
+                if sol is not None:      # from a solution and its multipliers: a later pass, or a warm start
                     warm = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations, True)
                     sol = warm(x0=z0, p=params, lbg=lbg, ubg=ubg, lam_g0=sol["lam_g"], lam_x0=sol["lam_x"])
                     stats = warm.stats()
@@ -300,6 +317,7 @@ class MultipleShootingSolver:
                                   bool(stats.get("success")), kernels, choices.IPOPT)
             if not result.success:
                 break
+            result.multipliers = (np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel())
         if result.path_min < -1e-7:
             result.success = False
             # IPOPT's own status, when it stopped early, stays the message: it is the cause
@@ -321,6 +339,14 @@ class MultipleShootingSolver:
         if pb.optimize or (violated and self.nlp != choices.ROOTFINDER):
             if not pb.optimize:
                 call.note("ipopt-repair")
+            previous = None if pb.optimize else self._repair_start(pb)
+            if previous is not None:
+                # a walk's steps repeat: the step before's repair, multipliers and active nodes
+                # with it, starts this one near its end (1 km/h stances: 25 IPOPT iterations -> 3)
+                repaired = self._solve_ipopt(pb, call, None, previous)
+                if repaired.success:
+                    return repaired
+                call.note("cold-repair")
             return self._solve_ipopt(pb, call, result if result.success else None)
         if violated:
             result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"

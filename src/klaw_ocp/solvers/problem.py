@@ -134,6 +134,9 @@ class SubphaseProblem:
     path_lower: object = None                    # (nh,), (N+1, nh) or callable; -inf disables a node
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
+    #: the previous step's solution of this subphase: a multiple-shooting repair starts from its
+    #: nodes, unknowns and multipliers when that solution was itself a repair
+    repair_start: Optional["SubphaseSolution"] = None
     optimize: bool = False
     mode: dict = field(default_factory=dict)
 
@@ -183,6 +186,9 @@ class SubphaseSolution:
     fallbacks: list = field(default_factory=list)
     #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
     build_s: float = 0.0
+    #: IPOPT's multipliers at the solution (constraints, unknowns), for the next step's repair to
+    #: start from; None from every other algorithm
+    multipliers: Optional[tuple] = None
 
     @property
     def status(self) -> str:
