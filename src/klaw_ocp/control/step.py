@@ -155,7 +155,7 @@ class StepController:
             self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
             if problem.optimize:
                 self.previous_states[problem.spec.name] = solution.states
-            if solution.multipliers is not None:
+            if solution.ipopt is not None:
                 self.repairs[problem.spec.name] = solution
             else:                  # a step that needed no repair: the next one's is not like it
                 self.repairs.pop(problem.spec.name, None)

@@ -134,8 +134,8 @@ class SubphaseProblem:
     path_lower: object = None                    # (nh,), (N+1, nh) or callable; -inf disables a node
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
-    #: the previous step's solution of this subphase: a multiple-shooting repair starts from its
-    #: nodes, unknowns and multipliers when that solution was itself a repair
+    #: the previous step's solution of this subphase: a multiple-shooting repair of the same
+    #: problem (:class:`IpoptPoint`) starts from its nodes, unknowns and multipliers
     repair_start: Optional["SubphaseSolution"] = None
     optimize: bool = False
     mode: dict = field(default_factory=dict)
@@ -155,6 +155,21 @@ class SubphaseProblem:
         self.h = self.grid[1:] - self.grid[:-1]     # np.diff's numbers, without its wrapper
         if (self.h <= 0).any():
             raise ValueError(f"{self.spec.name}: time grid must increase strictly")
+
+
+@dataclass(frozen=True)
+class IpoptPoint:
+    """IPOPT's multipliers at a solution (of the constraints, of the unknowns) and the NLP
+    parameters ``params`` of the problem it solved (x0, grid, context, nominal unknowns, scales,
+    weights)."""
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+    params: np.ndarray
+
+    def repeated_by(self, params: np.ndarray, tolerance: float) -> bool:
+        """Whether ``params`` are this problem's to ``tolerance`` (relative, absolute near 0)."""
+        mine = self.params
+        return mine.shape == params.shape and bool(np.all(np.abs(params - mine) <= tolerance * (1.0 + np.abs(mine))))
 
 
 @dataclass
@@ -186,9 +201,9 @@ class SubphaseSolution:
     fallbacks: list = field(default_factory=list)
     #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
     build_s: float = 0.0
-    #: IPOPT's multipliers at the solution (constraints, unknowns), for the next step's repair to
-    #: start from; None from every other algorithm
-    multipliers: Optional[tuple] = None
+    #: IPOPT's multipliers at the solution and the problem they solve, for the next step's repair
+    #: to start from; None from every other algorithm
+    ipopt: Optional["IpoptPoint"] = None
 
     @property
     def status(self) -> str:
