@@ -122,6 +122,10 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
                                   s.dispatchEvent(new Event("input"));""")
         line = wait_for(browser, """return document.querySelector('.control[data-field="walk.speed"] .refusal').textContent""")
         assert line == "walk.speed: got 11.5 km/h, allowed 0.5 to 9 km/h (attributes.speed_min/speed_max)"
+        # the slider back at the speed the walk has (3 km/h, taken above), its label with it
+        slider = browser.execute_script("""const s = document.getElementById("speed");
+                                           return [s.value, s.closest("label").querySelector("output").textContent];""")
+        assert slider == ["3", "3.00"], slider
         walked = len(browser.execute_script("return window.klaw.shown"))
         wait_for(browser, f"return window.klaw.shown.length >= {walked + 1}")
         # the walk so far, downloaded while it walks (the config that reproduces it)
@@ -132,9 +136,13 @@ def test_the_body_walks_and_the_speed_slider_changes_the_cadence(browser, tmp_pa
         # stop at rest, then the downloads: walk.bvh from the page's button
         browser.find_element("id", "stop").click()
         wait_for(browser, "return window.klaw.ended", timeout=30)
+        # both files asked for at once: each arrives as the file asked for, in order
+        browser.execute_script("window.klaw.exports = []")
         browser.find_element("id", "download-bvh").click()
-        exported = wait_for(browser, "return window.klaw.exported")
-        assert exported["file"] == "bvh" and exported["bvh_chars"] > 10_000 and exported["config_chars"] > 500
+        browser.find_element("id", "download-config").click()
+        exports = wait_for(browser, "return window.klaw.exports.length === 2 && window.klaw.exports")
+        assert [e["file"] for e in exports] == ["bvh", "config"], exports
+        assert all(e["bvh_chars"] > 10_000 and e["config_chars"] > 500 for e in exports)
         shot = tmp_path / "playground.png"
         browser.save_screenshot(str(shot))
     _not_blank(shot)

@@ -26,7 +26,8 @@ const ATTRIBUTE_LABELS = { pelvic_list: "pelvic list", pelvic_rotation: "pelvic 
 
 // what the browser test reads: the steps shown, each with its cadence, the last step received
 // (with the points the page made of it), and the page's forward kinematics
-const state = window.klaw = { shown: [], planned: [], ended: false, connected: false, refusals: [], accepted: null };
+const state = window.klaw = { shown: [], planned: [], ended: false, connected: false, refusals: [], accepted: null,
+                              exports: [] };
 window.klawForwardKinematics = framePoints;
 let socket, skeleton = null, steps = new Map(), current = null, walkTime = 0, lastTick = null, walkEnded = false, asked = 0;
 
@@ -35,12 +36,26 @@ function send(message) {
 }
 
 // -- the panel ---------------------------------------------------------------------------------
+function showValue(input) {
+  input.closest("label").querySelector("output").textContent =
+    Number(input.value).toFixed(input.step < 0.1 ? 3 : input.step < 1 ? 2 : 0);
+}
+
+// each slider's value in the walk going on, by its field ("walk.speed", "attributes.pelvic_list"):
+// a refused value puts its slider back there, beside the refusal, so the panel shows the walk
+const inEffect = new Map();
+function sliderOf(field) { return document.querySelector(`.control[data-field="${field}"] input[type=range]`); }
+function takeAllSliders() {
+  for (const input of document.querySelectorAll(".control[data-field] input[type=range]")) {
+    inEffect.set(input.closest(".control").dataset.field, Number(input.value));
+  }
+}
+
 function setUpSlider(input, spec) {
   input.min = spec.min; input.max = spec.max; input.value = spec.value;
-  const output = input.closest("label").querySelector("output");
-  const show = () => { output.textContent = Number(input.value).toFixed(input.step < 0.1 ? 3 : input.step < 1 ? 2 : 0); };
-  input.addEventListener("input", show);
-  show();
+  input.addEventListener("input", () => showValue(input));
+  showValue(input);
+  inEffect.set(input.closest(".control").dataset.field, Number(spec.value));
   const allowed = input.closest(".control").querySelector(".allowed") || document.createElement("span");
   allowed.className = "allowed note";
   allowed.textContent = ` (supported ${spec.allowed[0].toFixed(2)} – ${spec.allowed[1].toFixed(2)} ${spec.unit})`;
@@ -72,6 +87,8 @@ function showRefusal(field, message) {
   const control = document.querySelector(`.control[data-field="${key}"]`);
   const target = control ? control.querySelector(".refusal") : $("refusal-general");
   target.textContent = message;
+  const slider = sliderOf(key);
+  if (slider && inEffect.has(key)) { slider.value = inEffect.get(key); showValue(slider); }
 }
 
 let pending = null, lastSent = 0;
@@ -122,11 +139,12 @@ async function setUpPanel() {
   }
   $("start").addEventListener("click", () => send({ type: "start", settings: settings() }));
   $("stop").addEventListener("click", () => send({ type: "stop" }));
-  $("download-bvh").addEventListener("click", () => { wanted = "bvh"; send({ type: "export" }); });
-  $("download-config").addEventListener("click", () => { wanted = "config"; send({ type: "export" }); });
+  $("download-bvh").addEventListener("click", () => { wanted.push("bvh"); send({ type: "export" }); });
+  $("download-config").addEventListener("click", () => { wanted.push("config"); send({ type: "export" }); });
 }
 
-let wanted = null;
+// the files asked for, in order: the server answers one socket's exports in the order asked
+const wanted = [];
 function download(name, text, type) {
   const url = URL.createObjectURL(new Blob([text], { type }));
   const a = Object.assign(document.createElement("a"), { href: url, download: name });
@@ -150,6 +168,7 @@ function receive(m) {
     skeleton = m; scene.setSkeleton(m); strips.reset(); steps = new Map(); current = null; walkTime = 0; asked = 0; askedAt = null;
     walkEnded = false; state.ended = false; state.shown = []; state.planned = [];
     clearRefusals();
+    takeAllSliders();        // the new walk's settings are the panel's
     $("download-bvh").disabled = $("download-config").disabled = true;
     $("status").textContent = `walking (${m.method}${m.start_from_rest ? ", from rest" : ""})`;
   } else if (m.type === "step") {
@@ -173,11 +192,12 @@ function receive(m) {
     state.accepted = { on_screen: current ? current.index : null, target: m.target };
     for (const key of ["speed", "step_length", "step_frequency"]) {
       const p = document.querySelector(`.control[data-field="walk.${key}"] .refusal`);
-      if (p && key in m.target) p.textContent = "";
+      if (p && key in m.target) { p.textContent = ""; inEffect.set(`walk.${key}`, m.target[key]); }
     }
-    for (const name of Object.keys(m.target.attributes || {})) {
+    for (const [name, value] of Object.entries(m.target.attributes || {})) {
       const p = document.querySelector(`.control[data-field="attributes.${name}"] .refusal`);
       if (p) p.textContent = "";
+      if (typeof value === "number") inEffect.set(`attributes.${name}`, value);
     }
   } else if (m.type === "stopping") {
     $("status").textContent = "stopping at rest…";
@@ -186,8 +206,10 @@ function receive(m) {
   } else if (m.type === "failed") {
     walkEnded = true; showRefusal("message", m.message);
   } else if (m.type === "export") {
-    state.exported = { file: wanted, steps: m.steps, bvh_chars: m.bvh.length, config_chars: m.config.length };
-    if (wanted === "bvh") download("walk.bvh", m.bvh, "text/plain");
+    const file = wanted.shift() || "bvh";
+    state.exported = { file, steps: m.steps, bvh_chars: m.bvh.length, config_chars: m.config.length };
+    state.exports.push(state.exported);
+    if (file === "bvh") download("walk.bvh", m.bvh, "text/plain");
     else download(`${m.name}.yaml`, m.config, "application/yaml");
   }
 }
