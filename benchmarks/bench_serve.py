@@ -23,7 +23,10 @@
    what sessions leave behind once they end.
 
 The machine's load average is printed beside: the machine is shared, and a loaded one stretches
-every number. Timings are measured here and in docs/performance.md, never asserted in tests.
+every number. So is how much slower than docs/performance.md's reference machine it runs this work
+(the natural walk's median stance solve, :mod:`reference_machine`), with the ask's p50 and p99
+scaled by that: an estimate for the reference machine, not a measurement. Timings are measured
+here and in docs/performance.md, never asserted in tests.
 """
 from __future__ import annotations
 
@@ -38,6 +41,7 @@ from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.serve.protocol import step_text, strips_text
 from klaw_ocp.solvers.thread_safety import solving
 from klaw_ocp.stepwise import ReadyStep, StepwiseWalk, step_frames
+from reference_machine import REFERENCE_STANCE_SOLVE_MS, slower_than_reference
 
 SPEEDS_KMH = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
 
@@ -94,6 +98,8 @@ def natural(steps: int) -> dict:
     for part in PARTS:
         ms = np.array([r[part] for r in rows]) * 1000
         out[part] = {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99))}
+    # the machine: the walk's median stance solve, as bench_walk measures it
+    out["stance_solve_ms"] = 1000 * float(np.median([s.subphase("stance").wall_s for s in live.walk.steps]))
     return out
 
 
@@ -146,8 +152,15 @@ def main() -> None:
     args = parser.parse_args()
     load = os.getloadavg()[0]
     result = {"load_average": load, "natural": natural(args.steps), "ahead": {}}
-    for part, values in result["natural"].items():
+    for part in PARTS:
+        values = result["natural"][part]
         print(f"natural walk, {PARTS[part]:34s}: p50 {values['p50_ms']:6.2f} ms  p99 {values['p99_ms']:6.2f} ms")
+    solve = result["natural"]["stance_solve_ms"]
+    result["slower_than_reference"] = slower = slower_than_reference(solve)
+    ready = result["natural"]["ready"]
+    print(f"this machine's median stance solve is {solve:.2f} ms, {slower:.2f}x the reference machine's "
+          f"{REFERENCE_STANCE_SOLVE_MS} ms (docs/performance.md); scaled by that (an estimate, not measured): "
+          f"asked -> message ready p50 ~{ready['p50_ms'] / slower:.1f} ms, p99 ~{ready['p99_ms'] / slower:.1f} ms")
     for method in ("multiple-shooting", "plain-shooting"):
         ratios = {speed: ahead(speed, method) for speed in SPEEDS_KMH}
         result["ahead"][method] = ratios

@@ -50,15 +50,9 @@ from klaw_ocp.body_motion import body_motion
 from klaw_ocp.config import load_config
 from klaw_ocp.result_files import render_walk, write_rendered
 from klaw_ocp.walk import simulate_walk, walk_spec
+from reference_machine import REFERENCE_STANCE_SOLVE_MS, slower_than_reference
 
 MODES = (("multiple-shooting", "monitored"), ("plain-shooting", "monitored"), ("multiple-shooting", "tracking"))
-#: docs/performance.md's reference machine: its median stance solve (multiple shooting, monitored
-#: stance, natural walk), ms. The solve is compiled C and numpy bookkeeping, like the rest of the
-#: pipeline, so the ratio of this machine's to it says how much slower this machine is for this work.
-#: It was 0.5 ms with the code of session 29; session 30 made the solve itself faster (Newton's chord
-#: step, -O2 kernels): four alternating pairs of the old and new code on one machine put the new
-#: solve at 0.70-0.78 of the old (median 0.755), so 0.5 ms x 0.755 with this code.
-REFERENCE_STANCE_SOLVE_MS = 0.38
 TARGETS = (("realtime_factor", ">=", 50.0), ("ms_over_ps_time_ratio", "<=", 1.0),
            ("realtime_factor_tracking", ">=", 10.0), ("cold_cli_s", "<=", 5.0), ("cold_cli_plots_s", "<=", 3.0),
            ("peak_rss_mb", "<=", 300.0), ("realtime_factor_walk_and_angles", ">=", 100.0))
@@ -262,7 +256,7 @@ def main() -> None:
         held = value >= bound if op == ">=" else value <= bound
         print(f"target {key} {op} {bound:g}: {value:.3g} {'holds' if held else 'MISSED'}")
     # the machine: an estimate of the figures on the reference machine, clearly not a measurement
-    slower = ms["subphases"]["stance"]["median_ms"] / REFERENCE_STANCE_SOLVE_MS
+    slower = slower_than_reference(ms["subphases"]["stance"]["median_ms"])
     result["machine"]["stance_solve_ms"] = ms["subphases"]["stance"]["median_ms"]
     result["machine"]["slower_than_reference"] = slower
     print(f"\nthis machine's median stance solve is {ms['subphases']['stance']['median_ms']:.2f} ms, "
