@@ -115,8 +115,9 @@ class StepController:
         prepare_kernels(solver, lock_rule)
         self.guesses: dict = {}
         self.previous_states: dict = {}
-        #: the last repaired solution of each subphase (multiple shooting's IPOPT repair)
-        self.repairs: dict = {}
+        #: the last solution of each subphase that multiple shooting's IPOPT found (a repair, an
+        #: optimisation), with its multipliers
+        self.ipopt_solutions: dict = {}
         #: the thigh retraction the last step needed (deg), the next step's first try
         self.retraction_hint: float | None = None
         torque = F_THETA1_SCALE_REL * (body.mass * body.g) * body.l1
@@ -142,9 +143,10 @@ class StepController:
 
     def _solve(self, step: int, problem: SubphaseProblem, remember: bool = True) -> SubphaseSolution:
         """Solve; raise ConvergenceError on failure; keep the parameters and, for an optimised
-        problem, the node states to start the next step from; for a repaired one (IPOPT's
-        multipliers with it), the whole solution, from which the next step's repair starts."""
-        problem.repair_start = self.repairs.get(problem.spec.name)
+        problem, the node states to start the next step from; for one IPOPT found (its
+        multipliers with it), the whole solution, from which the next step's IPOPT starts when it
+        solves the same problem."""
+        problem.previous_solution = self.ipopt_solutions.get(problem.spec.name)
         solution = self.solver.solve(problem)
         if not solution.success:
             raise ConvergenceError(step, problem.spec.solution_name, solution.residual, solution.message,
@@ -156,9 +158,9 @@ class StepController:
             if problem.optimize:
                 self.previous_states[problem.spec.name] = solution.states
             if solution.ipopt is not None:
-                self.repairs[problem.spec.name] = solution
-            else:                  # a step that needed no repair: the next one's is not like it
-                self.repairs.pop(problem.spec.name, None)
+                self.ipopt_solutions[problem.spec.name] = solution
+            else:                  # a step that needed no IPOPT: the next one's is not like it
+                self.ipopt_solutions.pop(problem.spec.name, None)
         return solution
 
     def _guess(self, name: str, nu: int) -> np.ndarray:

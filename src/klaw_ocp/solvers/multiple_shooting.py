@@ -37,9 +37,9 @@ from .problem import IpoptPoint, SubphaseProblem, SubphaseSolution, fd_jacobian,
 from .thread_safety import IPOPT_LOCK
 
 
-#: how near (relative) a problem's NLP parameters must be to those of the step before's repair for
-#: this repair to start from it: a periodic walk's steps repeat to about 1e-9, a change of plan,
-#: attribute or start moves them by 1e-3 or more
+#: how near (relative) a problem's NLP parameters must be to those of the step before's IPOPT
+#: solution for this one to start from it: a periodic walk's steps repeat to about 1e-9, a change
+#: of plan, attribute or start moves them by 1e-3 or more
 REPEAT_TOLERANCE = 1e-6
 
 
@@ -274,20 +274,38 @@ class MultipleShootingSolver:
         weights = np.array([1.0 if f and pb.spec.residuals is None else 0.0 for f in pb.fixed])
         return np.concatenate([pb.x0, pb.grid, pb.context, pb.guess, pb.scale, weights])
 
-    def _repair_start(self, pb: SubphaseProblem) -> SubphaseSolution | None:
-        """The problem's ``repair_start`` when that repair solved this very problem (its NLP
+    def _same_problem_start(self, pb: SubphaseProblem) -> SubphaseSolution | None:
+        """The problem's ``previous_solution`` when IPOPT found it for this very problem (its NLP
         parameters within REPEAT_TOLERANCE: a periodic walk's next step), else None."""
-        prev, spec, n = pb.repair_start, pb.spec, self.intervals
+        prev, spec, n = pb.previous_solution, pb.spec, self.intervals
         if prev is None or prev.ipopt is None or np.shape(prev.states) != (n + 1, spec.nx):
             return None
         if list(prev.parameters) != list(spec.unknown_names) or not np.isfinite(prev.states).all():
             return None
         return prev if prev.ipopt.repeated_by(self._ipopt_params(pb), REPEAT_TOLERANCE) else None
 
+    def _ipopt_from(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
+        """IPOPT from the step before's solution of the same problem when there is one, else (or
+        should that fail: ``ipopt-restart``) from ``start`` (:meth:`_solve_ipopt`).
+
+        A periodic walk's steps repeat: the step before's solution, its multipliers and active
+        nodes with it, starts this one at its end (a 1 km/h stance's repair: 25 IPOPT iterations
+        -> 3; a tracking stance's optimisation 13 -> 2). Only the same problem: the stance's fit of
+        the hip to its sinusoid can have more than one local optimum, and a start from another
+        problem's may reach another than the usual start would (0.5 km/h, 1.5 m: a cost 8 % higher)."""
+        previous = self._same_problem_start(pb)
+        if previous is not None:
+            result = self._solve_ipopt(pb, call, None, previous)
+            if result.success:
+                return result
+            call.note("ipopt-restart")
+        return self._solve_ipopt(pb, call, start)
+
     def _solve_ipopt(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None,
                      previous: SubphaseSolution | None = None) -> SubphaseSolution:
-        """IPOPT on the NLP from ``previous`` (the step before's repair, with its multipliers: the
-        warm solver from its first pass), else from ``start`` (the square solution) or a simulation."""
+        """IPOPT on the NLP from ``previous`` (the step before's solution, with its multipliers: the
+        warm solver from its first pass), else from ``start`` (the square solution) or the
+        problem's initial guess (a simulation, or the node states it carries)."""
         spec, n = pb.spec, self.intervals
         kernels = self._kernels(pb, call)
         solver = call.built(ipopt_solver, spec, n, self.substeps, self.tolerance, self.max_iterations)
@@ -344,26 +362,14 @@ class MultipleShootingSolver:
         has_path = pb.spec.path is not None and pb.path_lower is not None
         # straight to IPOPT: an optimisation with a warm start, or nlp="ipopt" on an inequality problem
         if (self._warm(pb) if pb.optimize else self.nlp == choices.IPOPT and has_path):
-            return self._solve_ipopt(pb, call, None)
+            return self._ipopt_from(pb, call, None)
         result = self._solve_square(pb, call)
         violated = has_path and result.path_min < 0
         # a cold optimisation, or a repair, starts from the square solution: a nearby trajectory
         if pb.optimize or (violated and self.nlp != choices.ROOTFINDER):
             if not pb.optimize:
                 call.note("ipopt-repair")
-            previous = None if pb.optimize else self._repair_start(pb)
-            if previous is not None:
-                # a periodic walk's steps repeat: the step before's repair of the same problem, its
-                # multipliers and active nodes with it, starts this one at its end (1 km/h stances:
-                # 25 IPOPT iterations -> 3). Only the same problem: the stance's repair fits the hip
-                # to its sinusoid, which can have more than one local optimum, and a start from
-                # another problem's may reach another than the square solution's start would
-                # (0.5 km/h, 1.5 m: a cost 8 % higher)
-                repaired = self._solve_ipopt(pb, call, None, previous)
-                if repaired.success:
-                    return repaired
-                call.note("cold-repair")
-            return self._solve_ipopt(pb, call, result if result.success else None)
+            return self._ipopt_from(pb, call, result if result.success else None)
         if violated:
             result.message = f"path constraint violated by {-result.path_min:.3g} (nlp=rootfinder)"
         return result

@@ -134,9 +134,10 @@ class SubphaseProblem:
     path_lower: object = None                    # (nh,), (N+1, nh) or callable; -inf disables a node
     recovery_step: Optional[np.ndarray] = None   # signed increments of fixed unknowns (plain shooting)
     state_guess: Optional[np.ndarray] = None     # (N+1, nx) warm start for multiple shooting
-    #: the previous step's solution of this subphase: a multiple-shooting repair of the same
-    #: problem (:class:`IpoptPoint`) starts from its nodes, unknowns and multipliers
-    repair_start: Optional["SubphaseSolution"] = None
+    #: the previous step's solution of this subphase: multiple shooting's IPOPT (a repair, an
+    #: optimisation) starts from its nodes, unknowns and multipliers when it solved the same
+    #: problem (:class:`IpoptPoint`)
+    previous_solution: Optional["SubphaseSolution"] = None
     optimize: bool = False
     mode: dict = field(default_factory=dict)
 
@@ -201,7 +202,7 @@ class SubphaseSolution:
     fallbacks: list = field(default_factory=list)
     #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
     build_s: float = 0.0
-    #: IPOPT's multipliers at the solution and the problem they solve, for the next step's repair
+    #: IPOPT's multipliers at the solution and the problem they solve, for the next step's IPOPT
     #: to start from; None from every other algorithm
     ipopt: Optional["IpoptPoint"] = None
 
