@@ -100,6 +100,21 @@ def test_only_the_same_problem_starts_from_the_step_befores():
     assert any(s.iterations < 6 for s in _stances(warm))    # and its repeated steps start warm
 
 
+def test_the_same_problem_has_the_same_path_bounds():
+    """A toe clearance changed on the playground changes swing2's bound, not its NLP parameters."""
+    from types import SimpleNamespace
+
+    def problem(lower):
+        return SimpleNamespace(spec=SimpleNamespace(residuals=None), fixed=(False, True), x0=np.ones(2),
+                               grid=np.linspace(0, 1, 3), context=np.zeros(2), guess=np.zeros(2),
+                               scale=np.ones(2), path_lower=lower)
+    key = MultipleShootingSolver._problem_key
+    point = IpoptPoint(np.zeros(1), np.zeros(1), key(problem(np.full((3, 2), [0.015, -np.inf]))))
+    assert point.repeated_by(key(problem(np.full((3, 2), [0.015, -np.inf]))), REPEAT_TOLERANCE)
+    assert not point.repeated_by(key(problem(np.full((3, 2), [0.02, -np.inf]))), REPEAT_TOLERANCE)
+    assert not point.repeated_by(key(problem(None)), REPEAT_TOLERANCE)
+
+
 def test_a_problem_repeats_to_the_tolerance():
     params = np.array([0.7, -0.14, 0.0, 120.0])
     point = IpoptPoint(np.zeros(3), np.zeros(4), params)

@@ -276,13 +276,23 @@ class MultipleShootingSolver:
 
     def _same_problem_start(self, pb: SubphaseProblem) -> SubphaseSolution | None:
         """The problem's ``previous_solution`` when IPOPT found it for this very problem (its NLP
-        parameters within REPEAT_TOLERANCE: a periodic walk's next step), else None."""
+        parameters and path bounds within REPEAT_TOLERANCE: a periodic walk's next step), else None."""
         prev, spec, n = pb.previous_solution, pb.spec, self.intervals
         if prev is None or prev.ipopt is None or np.shape(prev.states) != (n + 1, spec.nx):
             return None
         if list(prev.parameters) != list(spec.unknown_names) or not np.isfinite(prev.states).all():
             return None
-        return prev if prev.ipopt.repeated_by(self._ipopt_params(pb), REPEAT_TOLERANCE) else None
+        return prev if prev.ipopt.repeated_by(self._problem_key(pb), REPEAT_TOLERANCE) else None
+
+    @staticmethod
+    def _problem_key(pb: SubphaseProblem) -> np.ndarray:
+        """What makes two of a subphase's NLPs the same problem: their parameters and their path
+        constraints' lower bounds where these are numbers (a rule of the states, such as the lock
+        rule's, is the spec's; infinite bounds as +-1e300, so that they compare)."""
+        params = MultipleShootingSolver._ipopt_params(pb)
+        if not isinstance(pb.path_lower, np.ndarray):
+            return params
+        return np.concatenate([params, np.nan_to_num(pb.path_lower.ravel(), posinf=1e300, neginf=-1e300)])
 
     def _ipopt_from(self, pb: SubphaseProblem, call: _Call, start: SubphaseSolution | None) -> SubphaseSolution:
         """IPOPT from the step before's solution of the same problem when there is one, else (or
@@ -290,7 +300,7 @@ class MultipleShootingSolver:
 
         A periodic walk's steps repeat: the step before's solution, its multipliers and active
         nodes with it, starts this one at its end (a 1 km/h stance's repair: 25 IPOPT iterations
-        -> 3; a tracking stance's optimisation 13 -> 2). Only the same problem: the stance's fit of
+        -> 3; a tracking stance's optimisation 13 -> 1). Only the same problem: the stance's fit of
         the hip to its sinusoid can have more than one local optimum, and a start from another
         problem's may reach another than the usual start would (0.5 km/h, 1.5 m: a cost 8 % higher)."""
         previous = self._same_problem_start(pb)
@@ -347,7 +357,8 @@ class MultipleShootingSolver:
                                   bool(stats.get("success")), kernels, choices.IPOPT)
             if not result.success:
                 break
-            result.ipopt = IpoptPoint(np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel(), params)
+            result.ipopt = IpoptPoint(np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel(),
+                                      self._problem_key(pb))
         if result.path_min < -1e-7:
             result.success = False
             # IPOPT's own status, when it stopped early, stays the message: it is the cause

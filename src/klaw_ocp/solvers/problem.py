@@ -160,17 +160,17 @@ class SubphaseProblem:
 
 @dataclass(frozen=True)
 class IpoptPoint:
-    """IPOPT's multipliers at a solution (of the constraints, of the unknowns) and the NLP
-    parameters ``params`` of the problem it solved (x0, grid, context, nominal unknowns, scales,
-    weights)."""
+    """IPOPT's multipliers at a solution (of the constraints, of the unknowns) and the numbers
+    ``problem`` that define the problem it solved (the NLP's parameters: x0, grid, context, nominal
+    unknowns, scales, weights; its numeric path bounds)."""
     lam_g: np.ndarray
     lam_x: np.ndarray
-    params: np.ndarray
+    problem: np.ndarray
 
-    def repeated_by(self, params: np.ndarray, tolerance: float) -> bool:
-        """Whether ``params`` are this problem's to ``tolerance`` (relative, absolute near 0)."""
-        mine = self.params
-        return mine.shape == params.shape and bool(np.all(np.abs(params - mine) <= tolerance * (1.0 + np.abs(mine))))
+    def repeated_by(self, problem: np.ndarray, tolerance: float) -> bool:
+        """Whether ``problem`` is this one's to ``tolerance`` (relative, absolute near 0)."""
+        mine = self.problem
+        return mine.shape == problem.shape and bool(np.all(np.abs(problem - mine) <= tolerance * (1.0 + np.abs(mine))))
 
 
 @dataclass
