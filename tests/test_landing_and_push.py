@@ -11,7 +11,7 @@ import pytest
 from klaw_ocp.body import Body
 from klaw_ocp.body_motion.swing_foot_guard import ground_limits
 from klaw_ocp.dynamics.points import stance_hip
-from klaw_ocp.kinematics.landing import LANDING_JOINT_RATE, LANDING_KNEE_MAX, starting_rates
+from klaw_ocp.kinematics.landing import LANDING_JOINT_RATE, LANDING_KNEE_MAX, least_largest_rates, starting_rates
 from klaw_ocp.kinematics.swing_foot import SwingFoot
 from klaw_ocp.walk import simulate_walk
 
@@ -142,3 +142,34 @@ def test_the_ground_guard_leaves_a_steep_foot_whose_points_cannot_reach_the_grou
     shank = math.radians(42.0)
     theta5, _ = ground_limits(body, foot, t, np.array([0.26]), np.array([shank]))
     assert theta5[0] == pytest.approx(math.radians(43.0), abs=1e-12)
+
+
+def _least_largest_one(a, b, most):
+    """The rate in [0, most] whose largest |a_i + b_i r| is least, by the definition: every end
+    and crossing of two lines tried, one by one, the first least kept."""
+    candidates = [0.0, most]
+    for i in range(3):
+        for j in range(3):
+            for sign in (1.0, -1.0):
+                if abs(b[i] - sign * b[j]) > 1e-12:
+                    candidates.append((sign * a[j] - a[i]) / (b[i] - sign * b[j]))
+    best = None
+    for r in candidates:
+        r = min(max(r, 0.0), most)
+        value = max(abs(a[k] + b[k] * r) for k in range(3))
+        if best is None or value < best[0]:
+            best = (value, r)
+    return best[1]
+
+
+def test_the_landing_rate_is_the_least_largest_for_every_knee_at_once():
+    """least_largest_rates, every knee the landing search tries in one pass, is the rate of the
+    definition, also where two lines are parallel (no crossing) or the foot may not turn."""
+    rng = np.random.default_rng(7)
+    at_zero, slope = rng.normal(0, 3, (200, 3)), rng.normal(0, 1, (200, 3))
+    slope[::5, 1] = slope[::5, 0]                  # parallel lines
+    slope[1::7] = 0.0                              # a foot that may not turn (no slope at all)
+    most = rng.uniform(0, 4, 200)
+    most[::11] = 0.0
+    expected = [_least_largest_one(a, b, m) for a, b, m in zip(at_zero, slope, most)]
+    assert np.allclose(least_largest_rates(at_zero, slope, most), expected, rtol=0, atol=1e-12)
