@@ -114,7 +114,6 @@ class StepController:
         self.swing_specs = swing_specs(lock_rule)
         prepare_kernels(solver, lock_rule)
         self.guesses: dict = {}
-        self.previous_states: dict = {}
         #: the last solution of each subphase that multiple shooting's IPOPT found (a repair, an
         #: optimisation), with its multipliers
         self.ipopt_solutions: dict = {}
@@ -142,10 +141,10 @@ class StepController:
         return ctx
 
     def _solve(self, step: int, problem: SubphaseProblem, remember: bool = True) -> SubphaseSolution:
-        """Solve; raise ConvergenceError on failure; keep the parameters and, for an optimised
-        problem, the node states to start the next step from; for one IPOPT found (its
-        multipliers with it), the whole solution, from which the next step's IPOPT starts when it
-        solves the same problem."""
+        """Solve; raise ConvergenceError on failure; keep the parameters and, for a solution IPOPT
+        found (its multipliers with it: a repair, an optimised problem), the whole solution, from
+        which the next step's IPOPT starts when it solves the same problem (and the tracking
+        stance from its node states whatever the problem)."""
         problem.previous_solution = self.ipopt_solutions.get(problem.spec.name)
         solution = self.solver.solve(problem)
         if not solution.success:
@@ -155,8 +154,6 @@ class StepController:
                                    max_iterations=getattr(self.solver, "max_iterations", None))
         if remember:
             self.guesses[problem.spec.name] = np.array([solution.parameters[k] for k in problem.spec.unknown_names])
-            if problem.optimize:
-                self.previous_states[problem.spec.name] = solution.states
             if solution.ipopt is not None:
                 self.ipopt_solutions[problem.spec.name] = solution
             else:                  # a step that needed no IPOPT: the next one's is not like it
@@ -182,9 +179,15 @@ class StepController:
         scale = np.array([self.stance_scale[k] for k in names])
         problem = SubphaseProblem(spec, inp.x0, grid, ctx, guess, scale, fixed=stance_fixed(at_rest),
                                   path_lower=stance_path_bounds(self.tracking, at_rest), optimize=self.tracking,
-                                  state_guess=None if at_rest else self.previous_states.get("stance"))
+                                  state_guess=self._tracking_states(at_rest))
         # the closing stance has one more unknown: it must not seed the next walk's stances
         return self._solve(index, problem, remember=not at_rest)
+
+    def _tracking_states(self, at_rest: bool) -> np.ndarray | None:
+        """The node states the tracking stance starts from: the previous tracking stance's (IPOPT
+        optimises it every step); none for the paper's square stance or the closing one."""
+        previous = self.ipopt_solutions.get("stance")
+        return previous.states if self.tracking and not at_rest and previous is not None else None
 
     def _balancing_torque(self, x0: np.ndarray) -> float:
         """A cold start's F_theta1: the torque that holds the stance leg against gravity at heel

@@ -111,9 +111,8 @@ def least_largest_rates(at_zero: np.ndarray, slope: np.ndarray, most: np.ndarray
     rates at r = 0 and per unit of r). The joints' starting rates are linear in the foot's (their
     velocities are linear in the hip's and the foot's), so the optimum is an end of the range or
     where two of the lines |a_i + b_i r| cross (each line's own zero among them: i = j, sign -1).
-    Every foot's 20 candidates at once (one at a time in Python loops, the fast walks' landing
-    search spent 3.5 ms a step here on a slow machine); the first least candidate, in the order
-    ends, then _PAIRS."""
+    Every foot's 20 candidates at once (one foot at a time in Python loops took 0.86 ms for a fast
+    step's 30 knees, this 0.12 ms); the first least candidate, in the order ends, then _PAIRS."""
     i, j, sign = (np.array(column) for column in zip(*_PAIRS))
     denominator = slope[:, i] - sign * slope[:, j]                         # (n, 18)
     valid = np.abs(denominator) > 1e-12

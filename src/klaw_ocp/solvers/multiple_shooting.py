@@ -328,7 +328,7 @@ class MultipleShootingSolver:
         else:
             u0, xs0, _ = self._initial_guess(pb, [], call, kernels)
         z0 = np.concatenate([xs0.ravel(), u0])
-        params = self._ipopt_params(pb)
+        params, problem = self._ipopt_params(pb), self._problem_key(pb)
         n_eq = n * spec.nx + spec.final.size1_out(0)
         iterations, active, result = 0, None, None
         for _ in range(4):
@@ -357,8 +357,7 @@ class MultipleShootingSolver:
                                   bool(stats.get("success")), kernels, choices.IPOPT)
             if not result.success:
                 break
-            result.ipopt = IpoptPoint(np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel(),
-                                      self._problem_key(pb))
+            result.ipopt = IpoptPoint(np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel(), problem)
         if result.path_min < -1e-7:
             result.success = False
             # IPOPT's own status, when it stopped early, stays the message: it is the cause
