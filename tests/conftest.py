@@ -26,7 +26,7 @@ def fail_at_step(monkeypatch):
 def fresh_kernel_cache(tmp_path_factory):
     """Every test session compiles the solver kernels it needs into a cache of its own: the
     compile path runs on every machine the suite runs on, and no test depends on a cache left by
-    an earlier run (klaw_ocp.solvers.kernels)."""
+    an earlier run (klaw_ocp.kernels)."""
     import os
     previous = os.environ.get("KLAW_OCP_CACHE_DIR")
     os.environ["KLAW_OCP_CACHE_DIR"] = str(tmp_path_factory.mktemp("kernel-cache"))

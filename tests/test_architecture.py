@@ -12,19 +12,20 @@ BASE = {"errors"}
 #: docs/architecture.md's table: a unit (a subpackage or a top-level module) -> what it may import
 ALLOWED = {
     "errors": set(), "choices": set(), "stop_signals": set(), "casadi_builds": set(),
+    "kernel_calls": set(), "kernels": {"casadi_builds", "kernel_calls"},
     "console": BASE | {"stop_signals"}, "body": BASE,
     "config_yaml": BASE, "config_paths": BASE | {"config_yaml"},
     "gait": BASE | {"body"},
     "dynamics": BASE | {"body", "choices", "casadi_builds"},
-    "solvers": BASE | {"choices", "casadi_builds"},
+    "solvers": BASE | {"kernels", "kernel_calls", "choices", "casadi_builds"},
     "kinematics": {"body"},
     "config": BASE | {"gait", "config_paths", "config_yaml", "body", "choices"},
     "control": BASE | {"kinematics", "dynamics", "solvers", "gait", "body", "choices", "casadi_builds"},
     # the middle level's state machine, one step at a time (shared by walk and stepwise)
     "step_loop": BASE | {"control", "kinematics", "dynamics", "body"},
-    "walk": BASE | {"step_loop", "control", "kinematics", "dynamics", "solvers", "gait", "config", "console",
+    "walk": BASE | {"step_loop", "control", "kinematics", "dynamics", "solvers", "kernels", "gait", "config", "console",
                     "stop_signals", "body", "choices"},
-    "body_motion": {"kinematics", "dynamics", "gait", "body"},
+    "body_motion": {"kinematics", "dynamics", "gait", "body", "kernels"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
     "human_gait": BASE | {"results", "body_motion", "dynamics", "gait", "body"},

@@ -16,7 +16,7 @@ import casadi as ca
 import pytest
 
 from klaw_ocp.console import CompileNotice
-from klaw_ocp.solvers import kernels
+from klaw_ocp import kernels
 
 NOTICE = "klaw-ocp: compiling the solver kernels for this machine, once"
 SAID_BESIDE = "compiling the solver kernels once for this machine"

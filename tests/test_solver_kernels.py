@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 from klaw_ocp.config import load_config
-from klaw_ocp.solvers import MultipleShootingSolver, integrator, ipopt_nlp, kernel_calls, kernels
+from klaw_ocp import kernel_calls, kernels
+from klaw_ocp.solvers import MultipleShootingSolver, integrator, ipopt_nlp
 from klaw_ocp.solvers.integrator import SubphaseKernels, rk4_interval, subphase_kernels
 from klaw_ocp.walk import simulate_walk, walk_spec
 
@@ -226,7 +227,7 @@ _RACE_SCRIPT = textwrap.dedent("""
     import hashlib, json, os, subprocess, sys, time
     from pathlib import Path
     import casadi as ca
-    from klaw_ocp.solvers.kernels import KernelLibrary
+    from klaw_ocp.kernels import KernelLibrary
     sync, racers = Path(sys.argv[1]), int(sys.argv[2])
     report = {"built": False}
     run = subprocess.run

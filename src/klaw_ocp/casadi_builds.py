@@ -15,7 +15,7 @@ from __future__ import annotations
 import functools
 import threading
 
-#: held while CasADi expressions are built (and C generated from them, solvers/kernels.py)
+#: held while CasADi expressions are built (and C generated from them, kernels.py)
 BUILD_LOCK = threading.RLock()
 
 

@@ -15,7 +15,7 @@ pause a first run makes, compiling the solver kernels, is announced before it st
   (``CasADi - <date> <time> WARNING("...") [file:line]``); while a walk runs, those lines are
   taken out of the stream and kept (without the date, once each); every other line goes through.
   Walks in several threads at once each keep the lines written from their own thread.
-- :class:`CompileNotice`: a listener for :func:`klaw_ocp.solvers.kernels.compile_notices` that
+- :class:`CompileNotice`: a listener for :func:`klaw_ocp.kernels.compile_notices` that
   says, on one line on stderr, that the kernels are being compiled once for this machine, how
   long that takes and where they are kept, once, before the pause.
 """

@@ -269,7 +269,7 @@ MAX_PRECOMPILED = 4
 def _compile_here_first(tasks: list[dict]) -> None:
     """Compile the kernels the walks need in this process before local workers start (each worker
     would otherwise compile the same ones at once, on a machine's first sweep), so that a caller
-    listening with :func:`klaw_ocp.solvers.kernels.compile_notices` hears of it; a cached kernel
+    listening with :func:`klaw_ocp.kernels.compile_notices` hears of it; a cached kernel
     only loads. Settings beyond MAX_PRECOMPILED compile in their workers as before."""
     from .control.step import prepare_kernels
     from .solvers import make_solver

@@ -34,7 +34,7 @@ from .control.step import StepController, StepResult
 from .errors import ConvergenceError, Interrupted
 from .kinematics.virtual_leg import StanceFoot, VirtualLegFrames
 from .solvers import make_solver
-from .solvers.kernels import compile_seconds
+from .kernels import compile_seconds
 from .solvers.thread_safety import solving
 from .step_loop import StepLoop
 from .stop_signals import stopped_words
@@ -72,7 +72,7 @@ class Walk:
     #: time in ``on_step`` is, so that ``duration / wall_s`` is the walk's real-time factor
     wall_s: float = 0.0
     #: seconds spent compiling the solver kernels during the walk: the first walk on a machine
-    #: (or after an upgrade) compiles them once (solvers/kernels.py); 0.0 when they were cached
+    #: (or after an upgrade) compiles them once (kernels.py); 0.0 when they were cached
     compile_s: float = 0.0
     initial_state: np.ndarray | None = None
     #: why a failed walk stopped (:meth:`klaw_ocp.errors.ConvergenceError.as_dict`), else None
@@ -121,7 +121,7 @@ def simulate_walk(spec, method: str | None = None, progress: bool = False, raise
     step just solved, ``walk.wall_s`` the simulation time so far): ``klaw-ocp run`` writes the
     step's rows there. The time spent in it is not counted in ``wall_s``, nor is the time spent
     compiling the solver kernels, which is ``walk.compile_s``
-    (:func:`klaw_ocp.solvers.kernels.compile_notices` tells when compiling starts).
+    (:func:`klaw_ocp.kernels.compile_notices` tells when compiling starts).
 
     With ``progress``, a tqdm bar on stderr advances as each step completes.
 

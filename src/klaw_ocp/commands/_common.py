@@ -93,7 +93,7 @@ def compile_notice():
     """The block within which a first compile of the solver kernels is said on one line of
     stderr before the pause (klaw_ocp.console.CompileNotice), for every command that solves."""
     from ..console import CompileNotice
-    from ..solvers.kernels import compile_notices
+    from ..kernels import compile_notices
     from . import PROG
     return compile_notices(CompileNotice(PROG))
 

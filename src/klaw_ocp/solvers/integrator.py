@@ -7,7 +7,7 @@ interval Function takes its start time and length as inputs, so one Function ser
 and a partial interval (an event inside it) is the same call with a shorter ``h``.
 
 :class:`SubphaseKernels` are the interval and what the solvers need around it, compiled once per
-machine (:mod:`.kernels`, docs/performance.md).
+machine (:mod:`klaw_ocp.kernels`, docs/performance.md).
 """
 from __future__ import annotations
 
@@ -17,14 +17,14 @@ import casadi as ca
 import numpy as np
 
 from ..casadi_builds import built_once
-from .kernels import KernelLibrary, prefetch, source_key
+from ..kernels import KernelLibrary, prefetch, source_key
 from .problem import SubphaseSpec, mapped
 
 
 class SubphaseKernels:
     """The compiled numeric core of one subphase on a grid of ``intervals`` intervals.
 
-    Each kernel is a flat-array callable (:mod:`.kernels`); matrices come back column-major, so
+    Each kernel is a flat-array callable (:mod:`klaw_ocp.kernels`); matrices come back column-major, so
     an (nx, N) output reshapes to (N, nx). Built once per (spec, substeps, intervals):
 
     - ``sim(x0, t[N], h[N], u, c) -> X[nx, N]``: the states at nodes 1..N, one forward shot;

@@ -11,7 +11,7 @@ spec's running residuals over the nodes divided by sqrt(N+1).
 IPOPT gets four functions, built here in MX around the per-interval RK4 of
 :func:`.integrator.rk4_interval` mapped over the grid (the block structure of multiple shooting;
 one Jacobian of the whole transcription in SX, as before, took 6 s and 740 MB to build), and
-compiled with the solver kernels (:mod:`.kernels`): ``nlp`` (f, g), ``grad_f``, ``jac_g`` and a
+compiled with the solver kernels (:mod:`klaw_ocp.kernels`): ``nlp`` (f, g), ``grad_f``, ``jac_g`` and a
 Gauss-Newton ``hess_lag`` = 2 lam_f J_r^T J_r. The Gauss-Newton Hessian is exact for the
 objective's curvature when r is linear in z (the repairs) and drops the constraints' curvature,
 whose second derivatives through 80 RK4 stages cost 80 ms an evaluation and buy few iterations
@@ -27,7 +27,7 @@ import numpy as np
 from ..casadi_builds import built_once
 from . import integrator
 from .integrator import rk4_interval
-from .kernels import KernelLibrary, source_key
+from ..kernels import KernelLibrary, source_key
 from .problem import SubphaseSpec
 
 NAMES = ("nlp", "grad_f", "jac_g", "hess_lag")

@@ -5,7 +5,7 @@ X_1..X_N (X_0 = x0 is given) and the free parameters. Equations: the continuity 
 ``X_{k+1} - Phi(X_k, t_k, h_k, u, c)`` for k = 0..N-1 and the final conditions ``g(X_N, c)``;
 Phi is the shared RK4 interval (:mod:`.integrator`). Everything that changes from step to step
 (x0, the grid, the context c, the fixed unknowns) is a parameter, so the compiled functions of
-each spec are built once per machine (:mod:`.kernels`) and reused with new numbers.
+each spec are built once per machine (:mod:`klaw_ocp.kernels`) and reused with new numbers.
 
 - Square problems (as many free unknowns as final conditions) are solved by Newton's method on
   the multiple-shooting system, exploiting its block structure: per-interval Jacobians from one

@@ -4,7 +4,7 @@ Walks may be solved in several threads of one process at the same time (docs/lim
 "Threads"). What they share, and how each is made safe:
 
 - the compiled kernels, one set per process: each thread calls them with work arrays of its own
-  (:mod:`.kernel_calls`); ctypes releases the GIL, so their C code runs in parallel;
+  (:mod:`klaw_ocp.kernel_calls`); ctypes releases the GIL, so their C code runs in parallel;
 - CasADi: its Functions may be evaluated from several threads at once, and its symbolic layer
   (the expressions the solvers build on first use) may be used from several threads in builds
   with thread-safe symbolics, which the PyPI wheels are (``CASADI_WITH_THREADSAFE_SYMBOLICS`` and

@@ -58,7 +58,7 @@ from typing import Callable, Optional, Sequence
 
 import casadi as ca
 
-from ..casadi_builds import BUILD_LOCK
+from .casadi_builds import BUILD_LOCK
 from .kernel_calls import CasadiFunction, CompiledFunction
 
 #: bump when the generated functions change in a way their key does not capture (the source of
