@@ -25,7 +25,7 @@ ALLOWED = {
     "step_loop": BASE | {"control", "kinematics", "dynamics", "body"},
     "walk": BASE | {"step_loop", "control", "kinematics", "dynamics", "solvers", "kernels", "gait", "config", "console",
                     "stop_signals", "body", "choices"},
-    "body_motion": {"kinematics", "dynamics", "gait", "body", "kernels"},
+    "body_motion": {"kinematics", "dynamics", "gait", "body", "kernels", "casadi_builds"},
     "results": BASE | {"body_motion", "control", "dynamics", "kinematics", "gait"},
     "compare": BASE,
     "human_gait": BASE | {"results", "body_motion", "dynamics", "gait", "body"},

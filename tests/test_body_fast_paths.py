@@ -1,5 +1,5 @@
 """The body's few-call forms (issue #38, docs/performance.md "The body frames in fewer numpy calls")
-give the numbers of the forms they replaced, to the bit: numpy's cross product, the forward
+give the numbers of the forms they replaced, to the bit: the forward
 kinematics a joint at a time, the local rotations from 37 x 3 angles, the upper body's angles a
 name at a time, the guard grids' padded rows."""
 import numpy as np
@@ -11,12 +11,6 @@ from klaw_ocp.body_motion.swing_foot_guard import _Grids
 
 BODY = Body(height=1.8, mass=80.0)
 RNG = np.random.default_rng(38)
-
-
-def test_cross_is_numpys_to_the_bit():
-    a, b = RNG.normal(size=(2, 40, 3)), RNG.normal(size=(40, 3))
-    assert np.array_equal(pose._cross(a, b), np.cross(a, b))
-    assert np.array_equal(pose._cross(b, a), np.cross(b, a))
 
 
 @pytest.mark.parametrize("n", [1, 7, 30])

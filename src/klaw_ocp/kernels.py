@@ -187,11 +187,13 @@ class KernelLibrary:
     ``build(compiling)`` returns the Functions named ``names``, in that order; it runs only when
     the library is not in the cache or no compiler is available (``compiling`` says which: the
     forms that compile well and those CasADi's virtual machine evaluates fastest differ). ``key_parts`` name
-    everything the generated code depends on besides CasADi's version and the compiler.
+    everything the generated code depends on besides CasADi's version and the compiler; ``what``
+    names the library's kernels in the notes about them.
     """
 
-    def __init__(self, key_parts: Sequence, names: Sequence[str], build: Callable[[bool], list]):
-        self._build, self._functions, self.names = build, None, tuple(names)
+    def __init__(self, key_parts: Sequence, names: Sequence[str], build: Callable[[bool], list],
+                 what: str = "solver kernel"):
+        self._build, self._functions, self.names, self.what = build, None, tuple(names), what
         digest = hashlib.sha256()
         for part in (GENERATOR_VERSION, sys.platform, platform.machine(), *key_parts):
             digest.update(repr(part).encode() if not isinstance(part, (bytes, str)) else
@@ -240,7 +242,7 @@ class KernelLibrary:
                     return lib
                 except OSError as err:   # e.g. built on another machine sharing the folder
                     problem = f"does not load ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
-            warnings.warn(f"klaw_ocp: the cached solver kernel {path} {problem}; rebuilding it",
+            warnings.warn(f"klaw_ocp: the cached {self.what} {path} {problem}; rebuilding it",
                           KernelCacheNote, stacklevel=3)
         try:
             with _compiling(folder):
@@ -249,7 +251,7 @@ class KernelLibrary:
             lib = ctypes.CDLL(str(path))
         except (OSError, subprocess.SubprocessError, RuntimeError) as err:
             self._functions = None   # built for compiling; CasADi evaluates another form faster
-            warnings.warn(f"klaw_ocp: compiling solver kernels failed ({err}); evaluating them "
+            warnings.warn(f"klaw_ocp: compiling {self.what}s failed ({err}); evaluating them "
                           f"with CasADi instead (slower). Set KLAW_OCP_JIT=0 to skip compiling.",
                           RuntimeWarning, stacklevel=3)
             return None

@@ -10,12 +10,13 @@ Every array is over n frames; all angles are in radians with the signs of :mod:`
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import lru_cache
 
 import numpy as np
 
 from ..body import Body
-from .skeleton import (ANGLE_NAMES, JOINTS, LUMBAR, SIDES, VERTEBRAE, Dimensions, frames_array,
-                       zxy_angles, zxy_matrices)
+from .leg_angles import LEG_COLUMNS, NORM_CHECKS, leg_angles
+from .skeleton import ANGLE_NAMES, JOINTS, LUMBAR, SIDES, VERTEBRAE, Dimensions, frames_array, zxy_matrices
 
 #: Hip points further than this (m) from the pelvis's own hips mean the caller's pelvis and legs
 #: disagree: the angles would silently describe another pose.
@@ -68,6 +69,9 @@ class LegPoints:
     toe: np.ndarray
 
 
+_LEG_POINT_NAMES = tuple(f.name for f in fields(LegPoints))
+
+
 @dataclass(frozen=True)
 class UpperBody:
     """Per-frame totals, each shape (n,) or a scalar (rad).
@@ -103,37 +107,6 @@ def _per_frame(value, name: str, n: int) -> np.ndarray:
     return np.full(n, a)   # a copy: the caller may write into the angles
 
 
-def _norm(v: np.ndarray) -> np.ndarray:
-    """np.linalg.norm(v, axis=-1, keepdims=True), its own sum without its Python wrapper."""
-    return np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=True))
-
-
-def _unit(v: np.ndarray, name: str) -> np.ndarray:
-    """``v`` (..., n, 3) over its length; a ValueError naming ``name`` and the first frame where it
-    has none."""
-    norm = _norm(v)
-    if (norm < 1e-12).any():
-        frame = int(np.argmin(norm[..., 0].reshape(-1, norm.shape[-2]).min(axis=0)))
-        raise ValueError(f"{name}: zero length in frame {frame}")
-    return v / norm
-
-
-_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """np.cross of (..., 3) arrays (broadcast), its products and differences in its order (the same
-    bits: a1 b2 - a2 b1, a2 b0 - a0 b2, a0 b1 - a1 b0), in seven array operations: np.cross's axis
-    handling cost 40 us a call, a component at a time nineteen operations."""
-    return a[..., _NEXT] * b[..., _AFTER] - a[..., _AFTER] * b[..., _NEXT]
-
-
-def _hinge_angle(parent: np.ndarray, child: np.ndarray) -> np.ndarray:
-    """Shape (..., n): the angle about z of ``parent^T @ child`` (both share their z axis)."""
-    local = np.swapaxes(parent, -1, -2) @ child
-    return np.arctan2(local[..., 1, 0], local[..., 0, 0])
-
-
 def _pelvis_matrices(a: np.ndarray) -> np.ndarray:
     pelvis = JOINTS[0]
     return zxy_matrices(*(sign * a[:, k] for k, sign in enumerate(pelvis.signs)))
@@ -149,43 +122,21 @@ def _hip_offsets(body: Body) -> dict:
     return {side: np.asarray(_JOINT[f"{s}_hip"].offset(d), dtype=float) for s, side in SIDES}
 
 
+@lru_cache(maxsize=16)
+def _hip_offsets_flat(body: Body) -> np.ndarray:
+    """The right and the left hip's offsets in one (6,) array (read-only: one per body, shared)."""
+    offsets = _hip_offsets(body)
+    flat = np.concatenate([offsets[side] for _, side in SIDES])
+    flat.flags.writeable = False
+    return flat
+
+
 def hip_positions(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.ndarray, rotation=None) -> dict:
     """"right"/"left" -> the hip joint centres shape (n, 3) that the pelvis pose places (m);
     ``rotation``: :func:`pelvis_rotations` of ``pelvis_angles`` when the caller has them."""
     centre = frames_array(pelvis_center, "pelvis_center", 3)
     rotation = pelvis_rotations(pelvis_angles) if rotation is None else rotation
     return {side: centre + rotation @ offset for side, offset in _hip_offsets(body).items()}
-
-
-#: the bones whose directions give the segments' axes: (from, to, what a zero length is called)
-_BONES = (("knee", "hip", "legs: hip-knee"), ("ankle", "knee", "legs: knee-ankle"),
-          ("heel", "metatarsal", "legs: heel-metatarsal"), ("metatarsal", "toe", "legs: metatarsal-toe"))
-
-
-def leg_segment_rotations(points: LegPoints) -> dict:
-    """World rotations shape (..., n, 3, 3) of "thigh", "shank", "foot" and "toe" (the frames of
-    the hip, knee, ankle and toes joints) from one leg's points (..., n, 3) (or several legs' at
-    once, stacked on leading axes).
-
-    The common z axis is the hinge ``unit((metatarsal - heel) x (hip - ankle))``, the leg plane's
-    normal: it comes from the foot, so a straight knee (thigh parallel to shank) is no special
-    case. The thigh's and shank's y axes run up the bones, the foot's and toe's x axes forward.
-    The four segments are two stacked passes (leg and foot frames), not four.
-    """
-    hinge = _unit(_cross(points.metatarsal - points.heel, points.hip - points.ankle),
-                  "legs: the leg plane (foot axis parallel to ankle-hip)")
-    bones = np.stack([getattr(points, end) - getattr(points, start) for start, end, _ in _BONES])
-    norm = _norm(bones)
-    if (norm < 1e-12).any():
-        for bone, (_, _, name) in zip(bones, _BONES):
-            _unit(bone, name)                # raises, naming the first bone without a length
-    bones = bones / norm
-    up, forward = bones[:2], bones[2:]       # thigh and shank y axes; foot and toe x axes
-    x = _unit(_cross(up, hinge), "leg frame")
-    legs = np.stack([x, up, _cross(x, up)], axis=-1)
-    y = _unit(_cross(hinge, forward), "foot frame")
-    feet = np.stack([forward, y, _cross(forward, y)], axis=-1)
-    return {"thigh": legs[0], "shank": legs[1], "foot": feet[0], "toe": feet[1]}
 
 
 _ARMS = (("shoulder_flexion", "shoulder", "flexion"), ("shoulder_abduction", "shoulder", "abduction"),
@@ -294,38 +245,41 @@ def skeleton_angles(body: Body, pelvis_center: np.ndarray, pelvis_angles: np.nda
     out = np.zeros((n, len(ANGLE_NAMES)))
     for k, name in enumerate(("pelvis_tilt", "pelvis_list", "pelvis_rotation")):
         out[:, _COLUMN[name]] = tilt_list_rotation[:, k]
-    both = _both_legs(legs, n)
-    hips = np.stack([centre + pelvis @ offset for offset in _hip_offsets(body).values()])
-    miss = _norm(both.hip - hips)[..., 0]
-    for (_, side), side_miss in zip(SIDES, miss):
+    # the legs' segment frames and angles, compiled (:mod:`.leg_angles`: the hinge axis from the
+    # foot, so a straight knee is no special case; the hip's zxy angles against the pelvis)
+    legs_out = leg_angles(pelvis, centre, _both_legs(legs, n), _hip_offsets_flat(body))
+    for (_, side), side_miss in zip(SIDES, legs_out["miss"].T):
         if (side_miss > HIP_TOLERANCE_M).any():
             frame = int(np.argmax(side_miss))
             raise ValueError(f"legs[{side!r}].hip: {side_miss[frame]:.3g} m from the pelvis's {side} hip "
                              f"in frame {frame} (allowed {HIP_TOLERANCE_M} m)")
-    segments = leg_segment_rotations(both)
-    # the world-axis angles, turned into clinical ones by the joints' own signs
-    hip_axes = zxy_angles(np.swapaxes(pelvis, -1, -2) @ segments["thigh"])
-    hinges = _hinge_angle(np.stack([segments["thigh"], segments["shank"], segments["foot"]]),
-                          np.stack([segments["shank"], segments["foot"], segments["toe"]]))
-    for i, (s, _) in enumerate(SIDES):
-        hip = _JOINT[f"{s}_hip"]
-        for name, sign, value in zip(hip.angle_names, hip.signs, hip_axes):
-            out[:, _COLUMN[name]] = sign * value[i]
-        for joint, value in zip(("knee", "ankle", "toes"), hinges):
-            hinge = _JOINT[f"{s}_{joint}"]
-            out[:, _COLUMN[hinge.angle_names[0]]] = hinge.signs[0] * value[i]
+    _check_lengths(legs_out["norms"].reshape(n, 2, 9))
+    out[:, LEG_COLUMNS] = legs_out["angles"]
     if upper_body is not None:
         set_upper_body_angles(out, upper_body)
     return out
 
 
-def _both_legs(legs: dict, n: int) -> LegPoints:
-    """Both legs' points in one pass, stacked on a leading axis (right, left): each (2, n, 3),
+def _check_lengths(norms: np.ndarray) -> None:
+    """A ValueError naming the first of :data:`.leg_angles.NORM_CHECKS` whose vector has no
+    length (below 1e-12) in some frame, and the frame where it is shortest; ``norms`` (n, 2, 9)."""
+    if not (norms < 1e-12).any():
+        return
+    start = 0
+    for name, count in NORM_CHECKS:
+        group = norms[:, :, start:start + count]
+        if (group < 1e-12).any():
+            raise ValueError(f"{name}: zero length in frame {int(np.argmin(group.min(axis=(1, 2))))}")
+        start += count
+
+
+def _both_legs(legs: dict, n: int) -> np.ndarray:
+    """Both legs' points in one array (side (right, left), point (LegPoints' order), frame, xyz),
     checked as frames_array checks them (one finiteness test, not twelve)."""
     for _, side in SIDES:
         if not isinstance(legs[side], LegPoints):
             raise ValueError(f"legs[{side!r}]: expected LegPoints, got {type(legs[side]).__name__}")
-    names = [f.name for f in fields(LegPoints)]
+    names = _LEG_POINT_NAMES
     try:
         points = np.array([[getattr(legs[side], name) for name in names] for _, side in SIDES], dtype=float)
     except ValueError:      # points of different shapes
@@ -334,4 +288,4 @@ def _both_legs(legs: dict, n: int) -> LegPoints:
         # the first point that is not a finite (n, 3) array raises
         points = np.array([[frames_array(getattr(legs[side], name), f"legs[{side!r}].{name}", 3, n) for name in names]
                            for _, side in SIDES])
-    return LegPoints(*np.swapaxes(points, 0, 1))
+    return points
