@@ -15,6 +15,7 @@ strike, t_step at the next). Frames: x forward, y up (the stance model's plane, 
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -182,16 +183,30 @@ def swing_curves(walk) -> StepCurves:
     two subphases."""
     swung = swung_steps(walk)
     t_step = [s.plan.timings.t_step for s in swung]
-    pieces = []
-    for k, step in enumerate(swung):
+    return StepCurves.of(t_step, [(k, *piece) for k, step in enumerate(swung) for piece in _swing_pieces(step)])
+
+
+#: each solved step's swing pieces (:func:`_swing_pieces`) by the step's id (with a weak reference
+#: to the step, which the pieces' arrays do not hold), dropped when the step is:
+#: the body's frames of a step read its swing and its neighbours' (the playground's windows: each
+#: step's swing curves three times), and a step's pieces cost 0.05-0.08 ms to make
+_SWING_PIECES: dict = {}
+
+
+def _swing_pieces(step) -> tuple:
+    """A solved step's swing nodes, subphase by subphase: (node times τ, θ3 θ4 (m, 2), their rates
+    (m, 2) per second). Made once a step (a step's solution never changes)."""
+    key = id(step)
+    pieces = _SWING_PIECES.get(key)
+    if pieces is None or pieces[0]() is not step:
         swing1, swing2, swing3 = (step.subphase(name) for name in ("swing1", "swing2", "swing3"))
-        x, rates = swing1.states, np.empty((len(swing1.t), 2))
-        rates[:, 0], rates[:, 1] = x[:, 8], spline_rates(swing1.t, x[:, 7])
-        pieces.append((k, swing1.t, x[:, 6:8], rates))
-        x = swing2.states
-        pieces.append((k, swing2.t, x[:, 6:8], x[:, 8:10]))
-        x = swing3.states                                     # states [stance(6), θ3, θ̇3]
-        values, rates = np.zeros((len(swing3.t), 2)), np.zeros((len(swing3.t), 2))
-        values[:, 0], rates[:, 0] = x[:, 6], x[:, 7]
-        pieces.append((k, swing3.t, values, rates))
-    return StepCurves.of(t_step, pieces)
+        x, rates1 = swing1.states, np.empty((len(swing1.t), 2))
+        rates1[:, 0], rates1[:, 1] = x[:, 8], spline_rates(swing1.t, x[:, 7])
+        x2, x3 = swing2.states, swing3.states                 # swing3's states: [stance(6), θ3, θ̇3]
+        values3, rates3 = np.zeros((len(swing3.t), 2)), np.zeros((len(swing3.t), 2))
+        values3[:, 0], rates3[:, 0] = x3[:, 6], x3[:, 7]
+        pieces = (weakref.ref(step), ((swing1.t, x[:, 6:8], rates1), (swing2.t, x2[:, 6:8], x2[:, 8:10]),
+                         (swing3.t, values3, rates3)))
+        _SWING_PIECES[key] = pieces
+        weakref.finalize(step, _SWING_PIECES.pop, key, None)
+    return pieces[1]
