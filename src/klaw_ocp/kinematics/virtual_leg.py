@@ -291,14 +291,20 @@ def leg_frames(geometry: StanceFoot, t, hips, pitch, reach_fraction, rocker_thet
     body = geometry.foot.body
     reach = np.hypot(*(pose["ankle"] - hips).T)
     th3, th4, knee = leg_ik(body, hips, pose["ankle"])
-    # meta-off from where the toe joint stops following the pitch (the band about q, leg_geometry)
-    period = _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q - meta_off_band(q))]
+    period = leg_periods(pitch, q)
     # where the foot can rise no further, the leg keeps the reach the rules held it to, so its
     # knee does not snap straight as the hip moves out of reach
     limit = body.l1 * np.where(pitch >= heel_up_roots.MAX_PITCH, reach_fraction, 1.0)
     return VirtualLegFrames(t, hips, knee, pose["ankle"], pose["heel"], pose["metatarsal"], pose["toe"],
                             th3, th4, ankle_angle(th3, th4, pose["sole"]), pose["theta6"], pitch, period,
                             np.maximum(reach - limit, 0.0))
+
+
+def leg_periods(pitch: np.ndarray, meta_off_theta6: float) -> np.ndarray:
+    """The foot's period at each pitch: normal (flat or on the heel), heel-off (heel up), meta-off
+    from where the toe joint stops following the pitch (the band about the limit, leg_geometry)."""
+    q = meta_off_theta6
+    return _PERIODS[(pitch > 0).astype(np.intp) + (pitch > q - meta_off_band(q))]
 
 
 #: The least forward rotation of the thigh over swing1 (rad): the toe-off posture keeps the thigh at
