@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from klaw_ocp.body_motion import motion, stance_kernel, stance_legs
+from klaw_ocp.body_motion.kernel_forms import mapped_library
 from klaw_ocp.kinematics.leg_geometry import FlatFoot, meta_off_band
 from klaw_ocp.kinematics.pitch_rules import RULE_FIELDS, rule_pitch
 from klaw_ocp.kinematics.virtual_leg import leg_frames
@@ -82,7 +83,7 @@ def test_the_kernel_gives_the_walks_numpy_virtual_legs(asked):
 def test_casadi_evaluation_gives_the_compiled_numbers(asked, monkeypatch):
     feet, which, t, hips = asked[len(asked) // 2]
     compiled = stance_legs.stance_frames(feet, which, t, hips)
-    library = stance_kernel.KernelLibrary(["test"], ["body_stance_block"], stance_kernel._build, what="body kernel")
+    library = mapped_library(["test"], stance_kernel.sample_function, {"body_stance_block": stance_kernel.BLOCK})
     monkeypatch.setenv("KLAW_OCP_JIT", "0")
     monkeypatch.setattr(stance_legs, "stance_at", lambda rows, shared: _with(library, rows, shared))
     by_casadi = stance_legs.stance_frames(feet, which, t, hips)

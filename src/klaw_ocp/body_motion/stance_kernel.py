@@ -31,11 +31,12 @@ import numpy as np
 
 from ..body import Body
 from ..casadi_builds import built_once
-from ..kernels import KernelLibrary, source_key
+from ..kernels import source_key
 from ..kinematics import heel_up_roots
 from ..kinematics.heel_up_roots import MAX_PITCH, heel_up
 from ..kinematics.leg_geometry import foot_pieces, meta_off_band
 from ..kinematics.pitch_rules import KNEE_HOLD_BLEND, RULE_FIELDS
+from .kernel_forms import TWO_PI, clamp, evaluate, leg_ik, mapped_library, mod, smoothstep
 
 BLOCK = 32
 COLUMNS = ("t", "hip_x", "hip_y") + RULE_FIELDS + ("rocker_theta6", "deficit", "ankle_x")
@@ -49,7 +50,6 @@ OUTPUTS = {"pitch": 1, "fraction": 1, "hip": 2, "knee": 2, "ankle": 2, "heel": 2
 #: the meta-off band root's Newton steps (numpy's: up to heel_up_roots._BAND_STEPS, all samples
 #: until every one has met; from the secant of the band's ends 3-4 reach 1e-14 rad)
 BAND_STEPS = 5
-_TWO_PI = 2 * math.pi
 
 
 @lru_cache(maxsize=64)
@@ -66,21 +66,6 @@ def constants(body: Body, meta_off_theta6: float) -> np.ndarray:
     return out
 
 
-def _mod(a, b):
-    """numpy's ``np.mod`` for b > 0: C's fmod moved into [0, b)."""
-    m = ca.fmod(a, b)
-    return ca.if_else(m < 0, m + b, m)
-
-
-def _clamp(x, lo, hi):
-    return ca.fmin(ca.fmax(x, lo), hi)
-
-
-def _smoothstep(u):
-    u = _clamp(u, 0.0, 1.0)
-    return u * u * (3 - 2 * u)
-
-
 def _soft_plus(v, width):
     blend = ca.if_else(v <= -width, 0.0, ca.if_else(v >= width, v, (v + width) ** 2 / (4 * ca.if_else(width > 0, width, 1.0))))
     return ca.if_else(width > 0, blend, ca.fmax(v, 0.0))
@@ -88,7 +73,7 @@ def _soft_plus(v, width):
 
 def _ramp(t, t_flat, t_end):
     span = t_end - t_flat
-    return ca.if_else(span > 0, _smoothstep((t - t_flat) / ca.if_else(span > 0, span, 1.0)), 1.0)
+    return ca.if_else(span > 0, smoothstep((t - t_flat) / ca.if_else(span > 0, span, 1.0)), 1.0)
 
 
 def _toe_flexion(p, q, w):
@@ -104,10 +89,10 @@ def _reach_pitch(c, hx, hy, radius):
         dist, r = ca.hypot(dx, dy), c[f"r{k}"]
         kk = (radius ** 2 - dist ** 2 - r ** 2) / (2 * r)
         meet = ca.logic_and(dist > 0, ca.fabs(kk) <= dist)
-        spread = ca.acos(_clamp(kk / ca.if_else(dist > 0, dist, 1.0), -1.0, 1.0))
+        spread = ca.acos(clamp(kk / ca.if_else(dist > 0, dist, 1.0), -1.0, 1.0))
         for sign in (1.0, -1.0):
             psi = ca.atan2(dy, dx) + sign * spread
-            candidate = c[f"p0{k}"] + (_mod(c[f"phi{k}"] - psi + math.pi, _TWO_PI) - math.pi)
+            candidate = c[f"p0{k}"] + (mod(c[f"phi{k}"] - psi + math.pi, TWO_PI) - math.pi)
             inside = ca.logic_and(meet, ca.logic_and(candidate >= c[f"lo{k}"] - heel_up_roots._EDGE,   # noqa: SLF001
                                                      candidate <= c[f"hi{k}"] + heel_up_roots._EDGE))  # noqa: SLF001
             least = ca.if_else(ca.logic_and(inside, ca.fmax(candidate, c[f"lo{k}"]) < least),
@@ -160,13 +145,13 @@ def sample_function() -> ca.Function:
     # the rules' pitch (pitch_rules.rule_pitch): the rocker before foot flat, then the knee's schedule
     turning = ca.logic_and(x["t_flat"] > 0, x["rocker_pitch"] != 0)
     t_flat_r, p0 = ca.if_else(turning, x["t_flat"], 1.0), ca.if_else(turning, x["rocker_pitch"], -1.0)
-    s = _clamp(t / t_flat_r, 0.0, 1.0)
+    s = clamp(t / t_flat_r, 0.0, 1.0)
     relative_rate = x["rocker_rate"] * t_flat_r / -p0
     k = ca.fmax(2.0, relative_rate - 1)
     rocker = ca.if_else(turning, p0 * (1 - s) ** k * (1 + (k - relative_rate) * s), 0.0)
     t_flat, t_knee = x["t_flat"], x["t_knee"]
     span = x["t_knee_end"] - t_knee
-    u = _clamp((t - t_knee) / ca.if_else(span > 0, span, 1.0), 0.0, 1.0)
+    u = clamp((t - t_knee) / ca.if_else(span > 0, span, 1.0), 0.0, 1.0)
     knee = x["knee_floor"] * _ramp(t, t_flat, t_knee) + (x["knee_toe_off"] - x["knee_floor"]) * u * u
     hold = ca.logic_and(t >= x["t_hold"], x["knee_hold"] > 0)
     knee = ca.if_else(hold, x["knee_hold"] + _soft_plus(knee - x["knee_hold"], KNEE_HOLD_BLEND), knee)
@@ -181,7 +166,7 @@ def sample_function() -> ca.Function:
     up = ca.logic_not(t < t_flat)
     pitch, fraction = ca.if_else(up, p, rocker), ca.if_else(up, fraction_up, 1.0)
     # the leg on that foot (virtual_leg.leg_frames): the foot's pose, the two-link leg
-    rocker_theta6 = x["rocker_theta6"] * ca.if_else(t_flat > 0, 1 - _smoothstep(t / ca.if_else(t_flat > 0, t_flat, 1.0)), 0.0)
+    rocker_theta6 = x["rocker_theta6"] * ca.if_else(t_flat > 0, 1 - smoothstep(t / ca.if_else(t_flat > 0, t_flat, 1.0)), 0.0)
     q, w = c["q"], c["band"]
     below = pitch < 0
     beta = pitch - _toe_flexion(ca.fmax(pitch, 0.0), q, w)
@@ -199,49 +184,25 @@ def sample_function() -> ca.Function:
     toe = (ca.if_else(below, meta[0] + c["l13"] * ca.cos(forward), c["toe_x"]),
            ca.if_else(below, meta[1] + c["l13"] * ca.sin(forward), c["toe_y"]))
     ankle = points["ankle"]
-    dx, dy = ankle[0] - hx, ankle[1] - hy
-    distance = ca.hypot(dx, dy)
-    d = ca.fmin(distance, l3 + l4)
-    half, short = (l3 + l4 + d) / 2, (l3 + l4 - d) / 2
-    s3, s4 = half - l3, half - l4
-    root = lambda v: ca.sqrt(ca.fmax(v, 0.0))      # noqa: E731
-    theta3 = ca.atan2(-dx, -dy) - 2 * ca.atan2(root(s3 * short), root(half * s4))
-    theta4 = 2 * ca.atan2(root(half * short), root(s3 * s4))
-    knee_point = (hx - l3 * ca.sin(theta3), hy - l3 * ca.cos(theta3))
+    theta3, theta4, knee_x, knee_y, distance = leg_ik(l3, l4, hx, hy, ankle[0], ankle[1])
+    knee_point = (knee_x, knee_y)
     limit = l1 * ca.if_else(pitch >= MAX_PITCH, fraction, 1.0)
     world = lambda point: ca.vertcat(point[0] + x["ankle_x"], point[1] + 0.0)     # noqa: E731
     out = {"pitch": pitch, "fraction": fraction, "hip": world((hx, hy)), "knee": world(knee_point), "ankle": world(ankle),
            "heel": world(points["heel"]), "metatarsal": world(meta), "toe": world(toe), "theta3": theta3,
-           "theta4": theta4, "theta5": _mod(-pitch + theta3 + theta4 + math.pi / 2, _TWO_PI), "theta6": theta6,
+           "theta4": theta4, "theta5": mod(-pitch + theta3 + theta4 + math.pi / 2, TWO_PI), "theta6": theta6,
            "overreach": ca.fmax(distance - limit, 0.0)}
     return ca.Function("body_stance", [row, shared], [out[name] for name in OUTPUTS], ["row", "constants"], list(OUTPUTS))
 
 
-def _build(compiling: bool) -> list:
-    """The sample's function mapped over BLOCK samples (a loop in the generated C), the constants shared."""
-    fn = sample_function()
-    args = [ca.MX.sym("rows", len(COLUMNS), BLOCK), ca.MX.sym("constants", len(CONSTANTS))]
-    return [ca.Function("body_stance_block", args, fn.map(BLOCK, "serial")(*args), fn.name_in(), list(OUTPUTS))]
-
-
 @built_once
 def _kernel():
-    library = KernelLibrary([source_key(sys.modules[__name__]), BLOCK, COLUMNS, CONSTANTS, BAND_STEPS],
-                            ["body_stance_block"], _build, what="body kernel")
+    library = mapped_library([source_key(sys.modules[__name__]), COLUMNS, CONSTANTS, BAND_STEPS], sample_function,
+                             {"body_stance_block": BLOCK})
     return library.functions()["body_stance_block"]
 
 
 def stance_at(rows: np.ndarray, shared: np.ndarray) -> dict:
     """The kernel over n samples: their rows (n, len(COLUMNS)), the constants -> OUTPUTS name ->
     (n,) or (n, 2)."""
-    n = len(rows)
-    blocks = -(-n // BLOCK)
-    if blocks * BLOCK != n:       # the last block filled with copies of the first row (any valid one)
-        rows = np.concatenate([rows, np.broadcast_to(rows[:1], (blocks * BLOCK - n, rows.shape[1]))])
-    kernel, out = _kernel(), {name: [] for name in OUTPUTS}
-    for b in range(blocks):
-        for name, value in zip(OUTPUTS, kernel(rows[b * BLOCK:(b + 1) * BLOCK], shared)):
-            out[name].append(value.reshape(BLOCK, -1))
-    return {name: ((np.concatenate(values) if len(values) > 1 else values[0])[:n] if values
-                   else np.zeros((0, OUTPUTS[name])))[:, 0 if OUTPUTS[name] == 1 else slice(None)]
-            for name, values in out.items()}
+    return evaluate(_kernel(), BLOCK, rows, shared, OUTPUTS)

@@ -250,11 +250,12 @@ def _smooth_turn(grids: _Grids, required, acceleration=GUARD_ACCELERATION, escal
     return out
 
 
-def _ankle_lift(body, grids: _Grids, hip, ankle, lowest):
-    """:func:`ankle_lift` of every step at once."""
+def _ankle_lift(body, grids: _Grids, hip, ankle, lowest, flexion=None):
+    """:func:`ankle_lift` of every step at once (``flexion``: the leg's knee, when the caller has it)."""
     need = np.maximum(-lowest, 0.0)
     dx, drop = ankle[:, 0] - hip[:, 0], hip[:, 1] - ankle[:, 1]
-    flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
+    if flexion is None:
+        flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
     wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
     bend = _smooth_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0), final=True)
     reach = reach_for_knee_flexion(body, flexion + bend)
@@ -266,7 +267,11 @@ def _turned(body, on: _Grids, scheduled, theta6, ankle_y, shank):
     """The turn of the ground guard (rad) of the scheduled θ5 ``scheduled`` and θ6 ``theta6`` on
     every step's grid, concatenated in order."""
     window = _ground_window(body, theta6, ankle_y, shank)    # (both clips' limits)
-    required = _clip_to(window, scheduled) - scheduled
+    return _turn_in_window(on, window, scheduled, _clip_to(window, scheduled) - scheduled)
+
+
+def _turn_in_window(on: _Grids, window: tuple, scheduled, required):
+    """:func:`_turned` given the ground's window and the turn it requires of the schedule."""
     turn = _smooth_turn(on, required)
     # the smooth turn lags where a large requirement falls off quickly (the schedule itself moving
     # towards the level sole), and so can overshoot into the other limit: the toe then goes down
@@ -297,6 +302,17 @@ def _at_times(times: list, on: _Grids, *on_grid) -> list:
         for o, values in zip(out, on_grid):
             o[mine] = np.interp(t, grid, values[start:end])
     return out
+
+
+def guarded_frames(body, times: list, grids: list, hip, ankle, shank, theta5, theta6, window, required, knee) -> tuple:
+    """The ground guard for the body's swing legs, whose leg, schedule and ground window on the
+    grids (concatenated in order: ``hip``, ``ankle`` (m, 2), the rest (m,)) come compiled
+    (:mod:`.swing_kernel`): :func:`lifted_feet`'s turn and lift, and the knee that relaxes the foot,
+    at each step's own ``times``, concatenated in order (the foot's angles follow from them)."""
+    on = _Grids(grids)
+    turn = _turn_in_window(on, window, theta5, required)
+    lift = _ankle_lift(body, on, hip, ankle, lowest_sole_point(body, ankle[:, 1], shank, theta5 + turn, theta6), knee)
+    return _at_times(times, on, turn, lift, knee)
 
 
 def grounded_feet(body, feet: list, times: list, grids: list, ankle_y, shank, knee) -> tuple[np.ndarray, np.ndarray]:

@@ -26,20 +26,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.points import foot_points_arrays
-from ..kinematics.leg_geometry import clamp, foot_pieces, leg_fk, leg_ik, smoothstep
-from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
-from .swing_foot_guard import guard_grid, lifted_feet
+from ..kinematics.leg_geometry import foot_pieces
+from ..kinematics.swing_foot import SCHEDULE_FIELDS
+from .swing_foot_guard import guard_grid, guarded_frames
+from .swing_kernel import FOOT_COLUMNS, LEG_COLUMNS, NODE, TOE_OFF_BLEND, feet_at, legs_at
+from .swing_kernel import constants as swing_constants
 from .walk_samples import swing_curves, swung_steps
 
-#: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
-#: posture (the model's ankle reached from the leg's own hip) into the dynamic knee angle
-TOE_OFF_BLEND = 0.5
-
-
-#: the columns of a step's swing schedule that the blends read
-_T_TOE_OFF, _T1, _T2, _T_HEEL_STRIKE = (SCHEDULE_FIELDS.index(name)
-                                        for name in ("t_toe_off", "t1", "t2", "t_heel_strike"))
+#: where _leg_rows and swing_legs write each part of the kernel's rows
+_U = LEG_COLUMNS.index("u")
+_NODE0, _NODE1 = ([LEG_COLUMNS.index(f"{name}_{end}") for name in NODE] for end in "01")
+_MODEL_HIP = [LEG_COLUMNS.index("model_hip_x"), LEG_COLUMNS.index("model_hip_y")]
+_OWN_HIP = [LEG_COLUMNS.index("own_x"), LEG_COLUMNS.index("own_y")]
+_TAU, _SCHEDULE = LEG_COLUMNS.index("tau"), [LEG_COLUMNS.index(name) for name in SCHEDULE_FIELDS]
+_OFFSETS = [LEG_COLUMNS.index(name) for name in ("toe_off_dx", "toe_off_dy", "toe_off_turn",
+                                                 "landing_dx", "landing_dy", "landing_turn")]
+_FOOT_TAU, _FOOT_SCHEDULE = FOOT_COLUMNS.index("tau"), [FOOT_COLUMNS.index(name) for name in SCHEDULE_FIELDS]
+_FOOT_REST = [FOOT_COLUMNS.index(name) for name in ("knee", "turn", "lift", "shank", "ankle_x", "ankle_y", "own_x", "own_y")]
 
 
 def _schedules(walk) -> np.ndarray:
@@ -48,43 +51,40 @@ def _schedules(walk) -> np.ndarray:
     return np.array([[getattr(s.swing_foot, name) for name in SCHEDULE_FIELDS] for s in swung_steps(walk)], float)
 
 
-def _model_leg(body, swing, step, tau, simulated_hip):
-    """The planar model's swing leg: (shank angle θ3 + θ4, ankle (n, 2)) from the simulated hip."""
-    shank, _, ankle = leg_fk(body, simulated_hip, *swing(step, tau).T)
-    return shank, ankle
+def _leg_rows(curves, schedules, step, tau, model_hips, own_hips, toe_off=None, landing=None) -> np.ndarray:
+    """:mod:`.swing_kernel`'s leg rows of samples of steps ``step`` (indices into the walk's swung
+    steps) at times ``tau``: the swing's curves ``curves`` (walk_samples.StepCurves) at their
+    intervals, the model's swing hips and the legs' own hips (n, 2), the steps' schedules
+    (:func:`_schedules`), the offsets at toe-off and heel strike (:func:`_end_offsets`; none: zero,
+    for the ends' own rows)."""
+    rows = np.zeros((len(tau), len(LEG_COLUMNS)))
+    u, interval = curves.locate(step, tau)
+    nodes = np.column_stack([curves.u, curves.values, curves.rates])
+    rows[:, _U], rows[:, _NODE0], rows[:, _NODE1] = u, nodes[interval], nodes[interval + 1]
+    rows[:, _MODEL_HIP], rows[:, _OWN_HIP], rows[:, _TAU] = model_hips, own_hips, tau
+    rows[:, _SCHEDULE] = schedules[step]
+    if toe_off is not None:
+        rows[:, _OFFSETS] = np.column_stack([*toe_off[0].T, toe_off[1], *landing[0].T, landing[1]])[step]
+    return rows
 
 
-def _body_leg(schedules, step, tau, model, simulated_hip, own_hip, toe_off, landing):
-    """The body's swing leg before the foot's lift at samples of steps ``step`` and times ``tau``,
-    the model's leg there ``model`` (:func:`_model_leg`): (the shank angle the scheduled foot is
-    set on, the ankle (n, 2) in the leg's plane). ``toe_off`` and ``landing``: :func:`_end_offsets`
-    at each step's toe-off and heel strike, blended out over the first TOE_OFF_BLEND of swing1 and
-    in over swing3."""
-    shank, ankle = model
-    dynamic = np.hypot(*(ankle - simulated_hip).T)
-    t_to, t1, t2, t_hs = schedules[step][:, [_T_TOE_OFF, _T1, _T2, _T_HEEL_STRIKE]].T
-    leaves = 1 - smoothstep((tau - t_to) / (TOE_OFF_BLEND * (t1 - t_to)))     # (smoothstep clamps to [0, 1])
-    lands = smoothstep((tau - t2) / np.maximum(t_hs - t2, 1e-12))
-    towards = ankle + leaves[:, None] * toe_off[0][step] + lands[:, None] * landing[0][step] - own_hip
-    reached = np.hypot(*towards.T)
-    # swing3's leg comes in straight (eq. 5's lock), where the knee goes as the square root of the
-    # distance's shortfall: the distance blends in as lands², so the knee starts bending at rest
-    # (as lands, a smooth distance started the knee at a finite rate: a 70-110 deg/s jump at t2)
-    distance = dynamic + np.maximum(leaves, lands * lands) * (reached - dynamic)
-    turn = leaves * toe_off[1][step] + lands * landing[1][step]
-    return shank + turn, own_hip + towards * (distance / np.maximum(reached, 1e-12))[:, None]
-
-
-def _end_offsets(schedules, steps, t, model, ankles, pitches) -> tuple[np.ndarray, np.ndarray]:
-    """How the body's swing leg differs from the model's where it meets a virtual leg, at times
-    ``t`` of the steps ``steps`` (indices), the model's leg there ``model`` (:func:`_model_leg`):
-    the virtual leg's ankles (k, 2) and foot pitches (k,) against the model's ankle and scheduled
-    foot. Returns (the ankle offsets (k, 2), the turns (rad, k) of the shank the scheduled foot
-    is set on that give the virtual foot's pitch)."""
-    model_shank, model_ankle = model
-    theta5 = schedule_angles(np.asarray(t, float), dict(zip(SCHEDULE_FIELDS, schedules[steps].T)), clamp)[0]
+def _end_offsets(walk, ends: dict, toe_off_feet, m: int) -> tuple[tuple, tuple]:
+    """How the body's swing leg differs from the model's where it meets a virtual leg, at each
+    swung step's toe-off and each step's heel strike but the last's (the model's leg there
+    ``ends``, :func:`.swing_kernel.leg_function`'s outputs): the ankle offsets (k, 2) and the turns
+    (rad, k) of the shank the scheduled foot is set on that give the virtual foot's pitch, as
+    (toe-off offsets, landing offsets), the landings' padded with zeros to the m swung steps (a
+    walk's last step has no next stance)."""
+    landing_ankles, landing_pitches = _landing_feet(walk)
+    ankles = np.concatenate([toe_off_feet[0][:m], landing_ankles])
+    pitches = np.concatenate([toe_off_feet[1][:m], landing_pitches])
     # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
-    return ankles - model_ankle, (theta5 - np.pi / 2 + pitches) - model_shank
+    ankle_offset = ankles - ends["model_ankle"]
+    shank_offset = (ends["timed_theta5"] - np.pi / 2 + pitches) - ends["model_shank"]
+    landings = len(landing_pitches)
+    return ((ankle_offset[:m], shank_offset[:m]),
+            (np.concatenate([ankle_offset[m:], np.zeros((m - landings, 2))]),
+             np.concatenate([shank_offset[m:], np.zeros(m - landings)])))
 
 
 def _landing_feet(walk) -> tuple[np.ndarray, np.ndarray]:
@@ -120,56 +120,48 @@ def _swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
 def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None, sampled=None) -> dict:
     """The swing leg in its plane at samples of steps ``step`` (n,) and step-local times ``tau``
     (n,), all after their step's toe-off: its points (n, 2), "hip" .. "toe".
-    ``hips_at(step, tau)`` gives the simulated hip and the swinging leg's own hip in its plane,
-    (n, 2) each, at any such samples (the frames', and each step's guard grid);
+    ``hips_at(step, tau)`` gives the planar model's swing hip and the swinging leg's own hip in its
+    plane, (n, 2) each, at any such samples (the frames', and each step's guard grid);
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
     at its toe-off as the body shows it (:func:`.motion.toe_off_feet`), which the swing leg
     starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already; ``sampled``:
     (the swinging steps, ``hips_at`` of their :func:`swing_samples`) when the caller has those.
 
-    The model's leg is evaluated once for every sample the body asks for (each step's toe-off and
-    heel strike, each swinging step's guard grid and the frames), and the body's leg once for the
-    grids and the frames: each pass costs mostly numpy's fixed overheads, not its samples."""
+    Compiled (:mod:`.swing_kernel`) on either side of the ground guard's smooth turns: the model's
+    leg and the timed foot at each step's toe-off and heel strike (the ends), then the body's leg,
+    its foot's schedule and the ground's window on the guard grids and at the frames, one call;
+    the guard's turn and lift on the grids (numpy, :func:`.swing_foot_guard.guarded_frames`); the
+    foot and the knee at the frames, one call."""
     body, steps = walk.spec.body, walk.steps
-    swing, schedules = swing_curves(walk), _schedules(walk)
-    # the swing foot's ground guard asks for each step's leg on its own grid: every step's grid in
-    # one pass (a pass per step costs mostly numpy's fixed overheads)
+    swing, schedules, shared = swing_curves(walk), _schedules(walk), swing_constants(body)
     swinging, counts = np.unique(step, return_counts=True)
     at_step, at_t, grids = _swing_samples(walk, swinging)
     if sampled is not None and np.array_equal(sampled[0], swinging):
-        at_simulated, at_own = sampled[1]
+        at_model, at_own = sampled[1]
     else:
-        at_simulated, at_own = hips_at(at_step, at_t)
-    simulated, own = hips_at(step, tau) if hips is None else hips
+        at_model, at_own = hips_at(at_step, at_t)
+    model, own = hips_at(step, tau) if hips is None else hips
     # each swung step's toe-off, and the heel strike of each step before the last (a last step that
     # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`)
-    m, landings = len(swung_steps(walk)), len(steps) - 1
-    ends = m + landings
-    end_step, end_t, grid_step, grid_t = at_step[:ends], at_t[:ends], at_step[ends:], at_t[ends:]
-    g = len(grid_t)
-    legs_step, legs_tau = np.concatenate([grid_step, step]), np.concatenate([grid_t, tau])
-    shank, ankle = _model_leg(body, swing, np.concatenate([end_step, legs_step]), np.concatenate([end_t, legs_tau]),
-                              np.concatenate([at_simulated, simulated]))
-    landing_ankles, landing_pitches = _landing_feet(walk)
-    ankle_offset, shank_offset = _end_offsets(schedules, end_step, end_t, (shank[:ends], ankle[:ends]),
-                                              np.concatenate([toe_off_feet[0][:m], landing_ankles]),
-                                              np.concatenate([toe_off_feet[1][:m], landing_pitches]))
-    # at the toe-offs, and at the heel strikes (a walk's last step's none: zero)
-    toe_off = (ankle_offset[:m], shank_offset[:m])
-    landing = (np.concatenate([ankle_offset[m:], np.zeros((m - landings, 2))]),
-               np.concatenate([shank_offset[m:], np.zeros(m - landings)]))
+    m, ends = len(swung_steps(walk)), len(swung_steps(walk)) + len(steps) - 1
+    end_rows = _leg_rows(swing, schedules, at_step[:ends], at_t[:ends], at_model[:ends], np.zeros((ends, 2)))
+    toe_off, landing = _end_offsets(walk, legs_at(end_rows, shared, ends=True), toe_off_feet, m)
+    # every step's guard grid and the frames in one pass (a pass per step costs mostly its fixed overheads)
+    legs_step, legs_tau = np.concatenate([at_step[ends:], step]), np.concatenate([at_t[ends:], tau])
     legs_own = np.concatenate([at_own[ends:], own])
-    legs_shank, legs_ankle = _body_leg(schedules, legs_step, legs_tau, (shank[ends:], ankle[ends:]),
-                                       np.concatenate([at_simulated[ends:], simulated]), legs_own, toe_off, landing)
+    leg = legs_at(_leg_rows(swing, schedules, legs_step, legs_tau, np.concatenate([at_model[ends:], model]),
+                            legs_own, toe_off, landing), shared)
+    g = len(legs_tau) - len(tau)
+    grid = {name: value[:g] for name, value in leg.items()}
+    window = (grid["lowest"], grid["highest"], grid["fits"] > 0.5, grid["level"])
     order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
-    theta5, theta6, lift = np.empty(len(tau)), np.empty(len(tau)), np.empty(len(tau))
-    theta5[order], theta6[order], lift[order] = lifted_feet(
-        body, [steps[k].swing_foot for k in swinging], np.split(tau[order], np.cumsum(counts)[:-1]), grids,
-        legs_own[:g], legs_ankle[:g], legs_shank[:g])
-    shank, ankle = legs_shank[g:], legs_ankle[g:]
-    heel, metatarsal, toe = foot_points_arrays(ankle, shank, theta5, theta6, body.l8, body.l9, body.l12, body.l13)
-    up = np.zeros((len(tau), 2))
-    up[:, 1] = lift                                  # the foot carried up with the lifted ankle
-    ankle, heel, metatarsal, toe = ankle + up, heel + up, metatarsal + up, toe + up
-    _, _, knee = leg_ik(body, own, ankle)
-    return {"hip": own, "knee": knee, "ankle": ankle, "heel": heel, "metatarsal": metatarsal, "toe": toe}
+    guarded = guarded_frames(body, np.split(tau[order], np.cumsum(counts)[:-1]), grids, legs_own[:g], grid["ankle"],
+                             grid["shank"], grid["theta5"], grid["theta6"], window, grid["required"], grid["knee"])
+    turn, lift, knee = (np.empty(len(tau)) for _ in range(3))
+    turn[order], lift[order], knee[order] = guarded
+    rows = np.empty((len(tau), len(FOOT_COLUMNS)))
+    rows[:, _FOOT_TAU], rows[:, _FOOT_SCHEDULE] = tau, schedules[step]
+    rows[:, _FOOT_REST] = np.column_stack([knee, turn, lift, leg["shank"][g:], leg["ankle"][g:], own])
+    foot = feet_at(rows, shared)
+    return {"hip": own, "knee": foot["knee"], "ankle": foot["ankle"], "heel": foot["heel"],
+            "metatarsal": foot["metatarsal"], "toe": foot["toe"]}

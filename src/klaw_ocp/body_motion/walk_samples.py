@@ -51,11 +51,18 @@ def hermite(t_nodes, values, rates, t, interval=None) -> np.ndarray:
     s = (t - start) / h
     if values.ndim == 2:
         s, h = s[:, None], h[:, None]
+    return hermite_sum(s, h, values[i], rates[i], values[j], rates[j])
+
+
+def hermite_sum(s, h, value0, rate0, value1, rate1):
+    """The cubic Hermite interpolant at the fraction ``s`` of an interval of length ``h`` between
+    (``value0``, ``rate0``) and (``value1``, ``rate1``): numpy arrays, or CasADi symbols (the
+    body's compiled swing legs interpolate with this)."""
     # (the factors used twice computed once: the same numbers)
     rest, squared = (1 - s) ** 2, s * s
     h00, h10 = (1 + 2 * s) * rest, s * rest
     h01, h11 = squared * (3 - 2 * s), squared * (s - 1)
-    return h00 * values[i] + h10 * h * rates[i] + h01 * values[j] + h11 * h * rates[j]
+    return h00 * value0 + h10 * h * rate0 + h01 * value1 + h11 * h * rate1
 
 
 def gradient(f: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -129,7 +136,11 @@ class StepCurves:
         return cls(t_step, u, np.concatenate([v for _, _, v, _ in pieces]).astype(float), rates, first, last)
 
     def __call__(self, step: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c).
+        """The curves at samples of steps ``step`` (n,) and local times ``tau`` (n,): (n, c)."""
+        return hermite(self.u, self.values, self.rates, *self.locate(step, tau))
+
+    def locate(self, step: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The samples' step coordinates u (n,) and the node that starts each one's interval (n,).
 
         Each sample is interpolated on its own step's nodes: at a heel strike's instant u = k + 1
         is also the next step's first node, and a sample of step k a round-off before it (τ one
@@ -139,8 +150,7 @@ class StepCurves:
         intervals, interval_starts = self._intervals
         k = np.searchsorted(interval_starts, u, side="right") - 1
         k = intervals[np.minimum(np.maximum(k, 0), len(intervals) - 1)]     # _positive_interval's
-        interval = np.minimum(np.maximum(k, self.first[step]), self.last[step])
-        return hermite(self.u, self.values, self.rates, u, interval)
+        return u, np.minimum(np.maximum(k, self.first[step]), self.last[step])
 
     @cached_property
     def _intervals(self) -> tuple[np.ndarray, np.ndarray]:
