@@ -294,7 +294,7 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     # the steps whose swing leg the frames show: at any instant at most one leg swings, the stance
     # leg's other one once the double support is over (where ground_legs leaves it)
     swing_steps = np.unique(samples.step[~(samples.tau <= t_ds[samples.step])])
-    at_step, at_tau = swing_samples(walk, swing_steps)
+    at_step, at_tau, grids = swing_samples(walk, swing_steps)
     # the frames, every step's toe-off (toe_off_feet's samples) and the swing legs' own samples (as
     # swing_hips makes them) in one pass of the pelvis, the planes and the virtual legs: each pass
     # costs mostly its fixed overhead of some hundred small numpy calls, not its samples
@@ -323,7 +323,7 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
                                   np.concatenate([simulated[rows], at_simulated]))
     hips_at = swing_hips(walk, lambda t: pelvis_angles_at(walk, t), pieces)   # (only if the swinging steps differ)
     swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips[:k], own),
-                       sampled=(swing_steps, (model_hips[k:], at_own)))
+                       sampled=(swing_steps, (at_step, at_tau, grids), (model_hips[k:], at_own)))
     start, legs, swung = 0, {}, np.stack([swung[name] for name in _POINTS])
     for side, r in swinging.items():
         points = np.stack([in_plane[side][name] for name in _POINTS])     # (point, frame, 2)

@@ -51,20 +51,18 @@ def _schedules(walk) -> np.ndarray:
     return np.array([[getattr(s.swing_foot, name) for name in SCHEDULE_FIELDS] for s in swung_steps(walk)], float)
 
 
-def _leg_rows(curves, schedules, step, tau, model_hips, own_hips, toe_off=None, landing=None) -> np.ndarray:
+def _leg_rows(curves, schedules, step, tau, model_hips, own_hips) -> np.ndarray:
     """:mod:`.swing_kernel`'s leg rows of samples of steps ``step`` (indices into the walk's swung
     steps) at times ``tau``: the swing's curves ``curves`` (walk_samples.StepCurves) at their
     intervals, the model's swing hips and the legs' own hips (n, 2), the steps' schedules
-    (:func:`_schedules`), the offsets at toe-off and heel strike (:func:`_end_offsets`; none: zero,
-    for the ends' own rows)."""
+    (:func:`_schedules`); the offsets at toe-off and heel strike zero (:func:`_end_offsets` gives
+    them: the caller writes them)."""
     rows = np.zeros((len(tau), len(LEG_COLUMNS)))
     u, interval = curves.locate(step, tau)
     nodes = np.column_stack([curves.u, curves.values, curves.rates])
     rows[:, _U], rows[:, _NODE0], rows[:, _NODE1] = u, nodes[interval], nodes[interval + 1]
     rows[:, _MODEL_HIP], rows[:, _OWN_HIP], rows[:, _TAU] = model_hips, own_hips, tau
     rows[:, _SCHEDULE] = schedules[step]
-    if toe_off is not None:
-        rows[:, _OFFSETS] = np.column_stack([*toe_off[0].T, toe_off[1], *landing[0].T, landing[1]])[step]
     return rows
 
 
@@ -99,16 +97,11 @@ def _landing_feet(walk) -> tuple[np.ndarray, np.ndarray]:
     return ankles, np.array([f.rocker_pitch for f in lands])
 
 
-def swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
     """The samples (steps (k,), step-local times (k,)) at which :func:`swing_legs` asks for the
     hips when the steps ``swinging`` (unique, increasing) swing at its frames: every step's toe-off,
     every heel strike but the last step's (it has no next stance) and each swinging step's guard
-    grid, in that order."""
-    return _swing_samples(walk, swinging)[:2]
-
-
-def _swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
-    """:func:`swing_samples`, and the guard grids."""
+    grid, in that order; and the guard grids."""
     steps, swung = walk.steps, swung_steps(walk)
     grids = [guard_grid(steps[k].swing_foot) for k in swinging]
     m = len(swung)
@@ -125,7 +118,7 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
     at its toe-off as the body shows it (:func:`.motion.toe_off_feet`), which the swing leg
     starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already; ``sampled``:
-    (the swinging steps, ``hips_at`` of their :func:`swing_samples`) when the caller has those.
+    (the swinging steps, their :func:`swing_samples`, ``hips_at`` of those) when the caller has them.
 
     Compiled (:mod:`.swing_kernel`) on either side of the ground guard's smooth turns: the model's
     leg and the timed foot at each step's toe-off and heel strike (the ends), then the body's leg,
@@ -135,23 +128,24 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     body, steps = walk.spec.body, walk.steps
     swing, schedules, shared = swing_curves(walk), _schedules(walk), swing_constants(body)
     swinging, counts = np.unique(step, return_counts=True)
-    at_step, at_t, grids = _swing_samples(walk, swinging)
     if sampled is not None and np.array_equal(sampled[0], swinging):
-        at_model, at_own = sampled[1]
+        (at_step, at_t, grids), (at_model, at_own) = sampled[1:]
     else:
+        at_step, at_t, grids = swing_samples(walk, swinging)
         at_model, at_own = hips_at(at_step, at_t)
     model, own = hips_at(step, tau) if hips is None else hips
     # each swung step's toe-off, and the heel strike of each step before the last (a last step that
-    # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`)
+    # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`),
+    # then every step's guard grid and the frames: their rows at once, the ends' first (they give
+    # the offsets the others' rows carry)
     m, ends = len(swung_steps(walk)), len(swung_steps(walk)) + len(steps) - 1
-    end_rows = _leg_rows(swing, schedules, at_step[:ends], at_t[:ends], at_model[:ends], np.zeros((ends, 2)))
-    toe_off, landing = _end_offsets(walk, legs_at(end_rows, shared, ends=True), toe_off_feet, m)
-    # every step's guard grid and the frames in one pass (a pass per step costs mostly its fixed overheads)
-    legs_step, legs_tau = np.concatenate([at_step[ends:], step]), np.concatenate([at_t[ends:], tau])
-    legs_own = np.concatenate([at_own[ends:], own])
-    leg = legs_at(_leg_rows(swing, schedules, legs_step, legs_tau, np.concatenate([at_model[ends:], model]),
-                            legs_own, toe_off, landing), shared)
-    g = len(legs_tau) - len(tau)
+    rows = _leg_rows(swing, schedules, np.concatenate([at_step, step]), np.concatenate([at_t, tau]),
+                     np.concatenate([at_model, model]), np.concatenate([at_own, own]))
+    toe_off, landing = _end_offsets(walk, legs_at(rows[:ends], shared, ends=True), toe_off_feet, m)
+    legs_own, legs_step = rows[ends:, _OWN_HIP], np.concatenate([at_step[ends:], step])
+    rows[ends:, _OFFSETS] = np.column_stack([*toe_off[0].T, toe_off[1], *landing[0].T, landing[1]])[legs_step]
+    leg = legs_at(rows[ends:], shared)
+    g = len(legs_step) - len(tau)
     grid = {name: value[:g] for name, value in leg.items()}
     window = (grid["lowest"], grid["highest"], grid["fits"] > 0.5, grid["level"])
     order = np.argsort(step, kind="stable")          # the samples step by step, each step's in order
