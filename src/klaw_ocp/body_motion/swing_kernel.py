@@ -25,6 +25,7 @@ import math
 import sys
 
 import casadi as ca
+import numpy as np
 
 from ..casadi_builds import built_once
 from ..dynamics.points import foot_points_sx
@@ -47,7 +48,9 @@ LEG_COLUMNS = (("u",) + tuple(f"{n}_0" for n in NODE) + tuple(f"{n}_1" for n in 
 #: guard grid's, interpolated), the guard's turn and the ankle's lift, the body's shank angle,
 #: ankle and own hip
 FOOT_COLUMNS = ("tau",) + SCHEDULE_FIELDS + ("knee", "turn", "lift", "shank", "ankle_x", "ankle_y", "own_x", "own_y")
-CONSTANTS = ("l3", "l4", "l8", "l9", "l12", "l13", "metatarsal_reach")
+#: the body's lengths, and the heel's distance from the ankle and its angle (np.hypot(l8, l9),
+#: math.atan2(l9, l8): swing_foot_guard._ground_window's)
+CONSTANTS = ("l3", "l4", "l8", "l9", "l12", "l13", "metatarsal_reach", "heel_radius", "heel_phase")
 LEG_OUTPUTS = {"model_shank": 1, "model_ankle": 2, "timed_theta5": 1, "shank": 1, "ankle": 2, "knee": 1,
                "theta5": 1, "theta6": 1, "lowest": 1, "highest": 1, "fits": 1, "level": 1, "required": 1}
 FOOT_OUTPUTS = {"theta5": 1, "theta6": 1, "ankle": 2, "heel": 2, "metatarsal": 2, "toe": 2, "knee": 2}
@@ -66,10 +69,11 @@ def _hermite(s, h, v0, r0, v1, r1):
 def ground_window(c, theta6, ankle_y, shank) -> tuple:
     """swing_foot_guard._ground_window of one sample: (lowest, highest θ5, whether one fits, θ5
     of the level sole)."""
-    reach, l8, l9, l13 = c["metatarsal_reach"], c["l8"], c["l9"], c["l13"]
+    reach, l9, l13 = c["metatarsal_reach"], c["l9"], c["l13"]
     toe_a, toe_b = -(reach + l13 * ca.cos(theta6)), l9 - l13 * ca.sin(theta6)
     lower, upper, fits = -ca.inf, ca.inf, 1
-    for radius, phase in ((ca.hypot(l8, l9), ca.atan2(l9, l8)), (ca.hypot(toe_a, toe_b), ca.atan2(toe_b, toe_a))):
+    # the heel's circle about the ankle is the body's (a constant); the toe tip's turns with θ6
+    for radius, phase in ((c["heel_radius"], c["heel_phase"]), (ca.hypot(toe_a, toe_b), ca.atan2(toe_b, toe_a))):
         centre = math.pi / 2 - phase
         centre = centre + 2 * math.pi * round_half_even((math.pi - centre) / (2 * math.pi))
         half = ca.acos(clamp(-ankle_y / radius, -1.0, 1.0))
@@ -151,7 +155,9 @@ def _kernels() -> dict:
 
 
 def constants(body) -> list:
-    return [body.l3, body.l4, body.l8, body.l9, body.l12, body.l13, body.metatarsal_reach]
+    """:data:`CONSTANTS` of a body."""
+    return [body.l3, body.l4, body.l8, body.l9, body.l12, body.l13, body.metatarsal_reach,
+            float(np.hypot(body.l8, body.l9)), math.atan2(body.l9, body.l8)]
 
 
 def legs_at(rows, shared, ends: bool = False) -> dict:
