@@ -16,7 +16,8 @@ from klaw_ocp.body_motion import ANGLES_COLUMNS, body_motion
 from klaw_ocp.body_motion.motion import swing_hips, toe_off_feet
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics
 from klaw_ocp.body_motion.stance_legs import stance_frames
-from klaw_ocp.body_motion.swing_legs import TOE_OFF_BLEND, swing_legs
+from klaw_ocp.body_motion.swing_kernel import TOE_OFF_BLEND
+from klaw_ocp.body_motion.swing_legs import swing_legs
 from klaw_ocp.body_motion.walk_samples import frame_times, hermite, locate_steps, spline_rates, swing_curves
 from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.dynamics import stance_hips

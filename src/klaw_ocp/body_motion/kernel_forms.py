@@ -5,11 +5,12 @@ function over a block of samples, compiled and cached as the solvers' kernels ar
 from __future__ import annotations
 
 import math
+import sys
 
 import casadi as ca
 import numpy as np
 
-from ..kernels import KernelLibrary
+from ..kernels import KernelLibrary, source_key
 
 TWO_PI = 2 * math.pi
 
@@ -64,32 +65,36 @@ def knee_flexion_for_reach(l3, l4, d):
 
 def mapped_library(key_parts, sample, blocks: dict) -> KernelLibrary:
     """A library of ``sample`` (a CasADi Function of (row, constants)) mapped over each block size
-    of ``blocks`` (name -> samples: a loop in the generated C), the constants shared."""
+    of ``blocks`` (name -> samples: a loop in the generated C), the constants shared, its outputs
+    stacked in one column a sample (:func:`evaluate` names them again: one array crosses the call,
+    not one per output)."""
     def build(compiling: bool) -> list:
         fn = sample()
         # the subexpressions the forms repeat (a schedule asked for twice, a hypot of the same
         # difference) computed once: the same numbers, a fifth fewer instructions
-        fn = ca.Function(fn.name(), fn.sx_in(), ca.cse(fn(*fn.sx_in())), fn.name_in(), fn.name_out())
+        stacked = ca.Function(fn.name(), fn.sx_in(), [ca.cse(ca.vertcat(*fn(*fn.sx_in())))], fn.name_in(), ["out"])
         functions = []
         for name, size in blocks.items():
             args = [ca.MX.sym("rows", fn.numel_in(0), size), ca.MX.sym("constants", fn.numel_in(1))]
-            functions.append(ca.Function(name, args, fn.map(size, "serial")(*args), fn.name_in(), fn.name_out()))
+            functions.append(ca.Function(name, args, [stacked.map(size, "serial")(*args)], fn.name_in(), ["out"]))
         return functions
-    return KernelLibrary([*key_parts, tuple(blocks.items())], list(blocks), build, what="body kernel")
+    # (this module's code builds them too: its source is part of every key)
+    return KernelLibrary([source_key(sys.modules[__name__]), *key_parts, tuple(blocks.items())], list(blocks), build,
+                         what="body kernel")
 
 
 def evaluate(kernel, block: int, rows: np.ndarray, constants: np.ndarray, outputs: dict) -> dict:
-    """``kernel`` (a block of ``block`` samples) over n rows (n, columns), the last block filled
-    with copies of the first row (any valid one) -> output name (``outputs``: name -> size) ->
-    (n,) or (n, size)."""
-    n = len(rows)
+    """``kernel`` (a block of ``block`` samples, :func:`mapped_library`'s) over n rows (n, columns),
+    the last block filled with copies of the first row (any valid one) -> output name (``outputs``:
+    name -> size, in the sample function's order) -> (n,) or (n, size), views of one array."""
+    n, width = len(rows), sum(outputs.values())
     blocks = -(-n // block)
     if blocks * block != n:
         rows = np.concatenate([rows, np.broadcast_to(rows[:1], (blocks * block - n, rows.shape[1]))])
-    out = {name: [] for name in outputs}
-    for b in range(blocks):
-        for name, value in zip(outputs, kernel(rows[b * block:(b + 1) * block], constants)):
-            out[name].append(value.reshape(block, -1))
-    return {name: ((np.concatenate(values) if len(values) > 1 else values[0])[:n] if values
-                   else np.zeros((0, outputs[name])))[:, 0 if outputs[name] == 1 else slice(None)]
-            for name, values in out.items()}
+    out = [kernel(rows[b * block:(b + 1) * block], constants)[0].reshape(block, width) for b in range(blocks)]
+    out = (np.concatenate(out) if len(out) > 1 else out[0])[:n] if out else np.zeros((0, width))
+    columns, start = {}, 0
+    for name, size in outputs.items():
+        columns[name] = out[:, start] if size == 1 else out[:, start:start + size]
+        start += size
+    return columns

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..casadi_builds import built_once
 from ..kernels import KernelLibrary, source_key
+from . import skeleton
 from .skeleton import ANGLE_NAMES, JOINTS, SIDES
 
 #: frames per kernel call: a step's frames at 30 fps fit one call from 1 km/h up; longer inputs
@@ -117,7 +118,8 @@ def _build(compiling: bool) -> list:
 
 @built_once
 def _kernel():
-    library = KernelLibrary([source_key(sys.modules[__name__]), BLOCK], ["body_leg_angles_block"], _build,
+    # the key: the source of the modules whose code builds the expressions (the joints' signs)
+    library = KernelLibrary([source_key(sys.modules[__name__], skeleton), BLOCK], ["body_leg_angles_block"], _build,
                             what="body kernel")
     return library.functions()["body_leg_angles_block"]
 

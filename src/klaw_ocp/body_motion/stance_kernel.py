@@ -32,9 +32,9 @@ import numpy as np
 from ..body import Body
 from ..casadi_builds import built_once
 from ..kernels import source_key
-from ..kinematics import heel_up_roots
+from ..kinematics import heel_up_roots, pitch_rules
 from ..kinematics.heel_up_roots import MAX_PITCH, heel_up
-from ..kinematics.leg_geometry import foot_pieces, meta_off_band
+from ..kinematics.leg_geometry import foot_pieces
 from ..kinematics.pitch_rules import KNEE_HOLD_BLEND, RULE_FIELDS
 from .kernel_forms import TWO_PI, clamp, evaluate, leg_ik, mapped_library, mod, smoothstep
 
@@ -197,7 +197,9 @@ def sample_function() -> ca.Function:
 
 @built_once
 def _kernel():
-    library = mapped_library([source_key(sys.modules[__name__]), COLUMNS, CONSTANTS, BAND_STEPS], sample_function,
+    # the key: the source of every module whose code builds the expressions
+    modules = (sys.modules[__name__], heel_up_roots, pitch_rules)
+    library = mapped_library([source_key(*modules), COLUMNS, CONSTANTS, BAND_STEPS], sample_function,
                              {"body_stance_block": BLOCK})
     return library.functions()["body_stance_block"]
 

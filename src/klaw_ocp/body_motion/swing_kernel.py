@@ -28,8 +28,10 @@ import casadi as ca
 import numpy as np
 
 from ..casadi_builds import built_once
+from ..dynamics import points
 from ..dynamics.points import foot_points_sx
 from ..kernels import source_key
+from ..kinematics import swing_foot
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
 from .kernel_forms import clamp, evaluate, knee_flexion_for_reach, leg_ik, mapped_library, round_half_even, smoothstep
 
@@ -148,7 +150,8 @@ def foot_function() -> ca.Function:
 
 @built_once
 def _kernels() -> dict:
-    key = [source_key(sys.modules[__name__]), LEG_COLUMNS, FOOT_COLUMNS, CONSTANTS]
+    # the key: the source of every module whose code builds the expressions
+    key = [source_key(sys.modules[__name__], swing_foot, points), LEG_COLUMNS, FOOT_COLUMNS, CONSTANTS]
     legs = mapped_library(key, leg_function, {"body_swing_legs": LEG_BLOCK, "body_swing_ends": ENDS_BLOCK}).functions()
     feet = mapped_library(key, foot_function, {"body_swing_feet": FOOT_BLOCK}).functions()
     return {**legs, **feet}

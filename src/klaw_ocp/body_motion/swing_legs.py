@@ -11,7 +11,7 @@ along the leg, and the knee the body shows is the dynamic one. At both ends the 
 virtual leg (:func:`_end_offsets`), whose knee is the inverse kinematics of the leg's own hip and
 the planted foot: at toe-off the body's leg starts at the virtual leg's ankle and foot pitch as
 the body shows them (:func:`.motion.toe_off_feet`) and blends into the model's ankle, the
-dynamic distance and the scheduled foot over the first TOE_OFF_BLEND of swing1; over swing3 it
+dynamic distance and the scheduled foot over the first TOE_OFF_BLEND (:mod:`.swing_kernel`) of swing1; over swing3 it
 blends into the next stance's heel-strike posture (its knee flexed where
 :mod:`klaw_ocp.kinematics.landing` says, its foot then a little more toe-up), the heel on the
 planned point (the two hips coincide there: no lateral displacement). Smoothsteps both, so no
@@ -29,7 +29,7 @@ import numpy as np
 from ..kinematics.leg_geometry import foot_pieces
 from ..kinematics.swing_foot import SCHEDULE_FIELDS
 from .swing_foot_guard import guard_grid, guarded_frames
-from .swing_kernel import FOOT_COLUMNS, LEG_COLUMNS, NODE, TOE_OFF_BLEND, feet_at, legs_at
+from .swing_kernel import FOOT_COLUMNS, LEG_COLUMNS, NODE, feet_at, legs_at
 from .swing_kernel import constants as swing_constants
 from .walk_samples import swing_curves, swung_steps
 
