@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .body_motion.motion import BodyMotion, Samples, body_motion_at
+from .body_motion.motion import BodyMotion, Samples, body_motion_at, prepare_kernels
 from .config import ExperimentConfig, check_stance_method, check_walk_size
 from .config import MAX_FRAMES
 from .control.gains import control_gains
@@ -136,6 +136,7 @@ class StepwiseWalk:
                                         solver, spec.lock_rule, spec.stance)
             self._loop = StepLoop(self.spec, controller, self._plan_of)
         self.walk.initial_state = self._loop.initial_state.copy()
+        prepare_kernels()        # the body's (compiled or loaded now, not at the first step's frames)
         self._shown = 0          # the next step to hand out with its frames
         #: the stance half of the step after the last one solved whole (:meth:`finish_ahead`)
         self._ahead: StanceStage | None = None

@@ -11,12 +11,16 @@ the walk never imports it.
 - :mod:`.swing_foot_guard`: the swing foot the body shows, kept out of the ground (every step's in
   one pass; the summary's swing-foot clearance reads it too);
 - :mod:`.upper_body`: the lateral weave and the upper body following the legs;
-- :mod:`.walk_samples`: the solved states between their nodes, at the body's frames.
+- :mod:`.walk_samples`: the solved states between their nodes, at the body's frames;
+- compiled as the solvers' kernels are (:mod:`klaw_ocp.kernels`; :func:`prepare_kernels` compiles
+  or loads them ahead of the first frames): :mod:`.leg_angles` (the legs' angles from their
+  points), :mod:`.stance_kernel` (the virtual legs' pitch rules and legs), :mod:`.swing_kernel`
+  (the swing legs on either side of the ground guard), their shared forms :mod:`.kernel_forms`.
 
 It builds on the leg rules the walk solved with (:mod:`klaw_ocp.kinematics`) and on the models'
 points (:mod:`klaw_ocp.dynamics.points`).
 """
-from .motion import ANGLES_COLUMNS, BodyMotion, body_motion
+from .motion import ANGLES_COLUMNS, BodyMotion, body_motion, prepare_kernels
 from .skeleton import ANGLE_NAMES, JOINTS, SIDES
 
-__all__ = ["ANGLES_COLUMNS", "ANGLE_NAMES", "JOINTS", "SIDES", "BodyMotion", "body_motion"]
+__all__ = ["ANGLES_COLUMNS", "ANGLE_NAMES", "JOINTS", "SIDES", "BodyMotion", "body_motion", "prepare_kernels"]

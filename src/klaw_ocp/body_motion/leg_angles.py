@@ -25,6 +25,7 @@ the angles agree with it to a few units in the last place (tests/test_skeleton.p
 from __future__ import annotations
 
 import sys
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -117,11 +118,16 @@ def _build(compiling: bool) -> list:
 
 
 @built_once
-def _kernel():
+def library() -> KernelLibrary:
+    """The kernel's library (built once; :meth:`~klaw_ocp.kernels.KernelLibrary.load` compiles it)."""
     # the key: the source of the modules whose code builds the expressions (the joints' signs)
-    library = KernelLibrary([source_key(sys.modules[__name__], skeleton), BLOCK], ["body_leg_angles_block"], _build,
-                            what="body kernel")
-    return library.functions()["body_leg_angles_block"]
+    return KernelLibrary([source_key(sys.modules[__name__], skeleton), BLOCK], ["body_leg_angles_block"], _build,
+                         what="body kernel")
+
+
+@lru_cache(maxsize=None)
+def _kernel():
+    return library().functions()["body_leg_angles_block"]
 
 
 def leg_angles(rotation: np.ndarray, centre: np.ndarray, points: np.ndarray, offsets: np.ndarray) -> dict:

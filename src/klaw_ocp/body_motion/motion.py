@@ -23,8 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gait.plan import stance_leg
+from ..kernels import prefetch
 from ..kinematics.leg_geometry import leg_ik
 from ..kinematics.pelvis import PelvisSchedule
+from . import leg_angles, stance_kernel, swing_kernel
 from .pose import LegPoints, UpperBody, hip_positions, pelvis_rotations, set_upper_body_angles, skeleton_angles
 from .skeleton import ANGLE_NAMES, SIDES
 from .stance_legs import stance_frames
@@ -272,6 +274,15 @@ def model_swing_hips(walk, step: np.ndarray, tau: np.ndarray, simulated: np.ndar
     if not len(simulated):
         return np.array(simulated, float)
     return PelvisSchedule.per_sample([s.pelvis for s in walk.steps], step).swing_side_hips(tau, simulated)
+
+
+def prepare_kernels() -> None:
+    """Compile (the first time on a machine, in parallel) or load the body's compiled kernels now,
+    rather than at the first frames: a command that solves does it inside its compile notice."""
+    libraries = (leg_angles.library(), stance_kernel.library(), *swing_kernel.libraries())
+    prefetch([library.load for library in libraries])
+    for library in libraries:
+        library.load()
 
 
 def body_motion(walk, fps: float) -> BodyMotion:

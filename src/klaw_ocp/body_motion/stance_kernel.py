@@ -196,12 +196,17 @@ def sample_function() -> ca.Function:
 
 
 @built_once
-def _kernel():
+def library():
+    """The kernel's library (built once; :meth:`~klaw_ocp.kernels.KernelLibrary.load` compiles it)."""
     # the key: the source of every module whose code builds the expressions
     modules = (sys.modules[__name__], heel_up_roots, pitch_rules)
-    library = mapped_library([source_key(*modules), COLUMNS, CONSTANTS, BAND_STEPS], sample_function,
-                             {"body_stance_block": BLOCK})
-    return library.functions()["body_stance_block"]
+    return mapped_library([source_key(*modules), COLUMNS, CONSTANTS, BAND_STEPS], sample_function,
+                          {"body_stance_block": BLOCK})
+
+
+@lru_cache(maxsize=None)
+def _kernel():
+    return library().functions()["body_stance_block"]
 
 
 def stance_at(rows: np.ndarray, shared: np.ndarray) -> dict:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import sys
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -149,12 +150,18 @@ def foot_function() -> ca.Function:
 
 
 @built_once
-def _kernels() -> dict:
+def libraries() -> tuple:
+    """The kernels' libraries, the legs' and the feet's (built once; :meth:`~klaw_ocp.kernels.KernelLibrary.load`
+    compiles them)."""
     # the key: the source of every module whose code builds the expressions
     key = [source_key(sys.modules[__name__], swing_foot, points), LEG_COLUMNS, FOOT_COLUMNS, CONSTANTS]
-    legs = mapped_library(key, leg_function, {"body_swing_legs": LEG_BLOCK, "body_swing_ends": ENDS_BLOCK}).functions()
-    feet = mapped_library(key, foot_function, {"body_swing_feet": FOOT_BLOCK}).functions()
-    return {**legs, **feet}
+    return (mapped_library(key, leg_function, {"body_swing_legs": LEG_BLOCK, "body_swing_ends": ENDS_BLOCK}),
+            mapped_library(key, foot_function, {"body_swing_feet": FOOT_BLOCK}))
+
+
+@lru_cache(maxsize=None)
+def _kernels() -> dict:
+    return {name: fn for library in libraries() for name, fn in library.functions().items()}
 
 
 def constants(body) -> list:

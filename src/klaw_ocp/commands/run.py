@@ -117,12 +117,16 @@ def walk_into(writer, spec, quiet: bool = True):
     """Walk ``spec`` with ``writer`` writing each step as it completes; returns (walk, outcome,
     failure): outcome "ok", "failed" (failure: the ConvergenceError) or "interrupted". If the
     solver kernels have to be compiled (the first run on a machine), one line on stderr says so
-    before the pause, even with ``quiet``: it is the one pause a user cannot otherwise explain."""
+    before the pause, even with ``quiet``: it is the one pause a user cannot otherwise explain. The
+    body's kernels are compiled (or loaded) first, under the same line: not counted in the walk's
+    ``compile_s``, and no second pause after the walk."""
+    from ..body_motion import prepare_kernels
     from ..errors import ConvergenceError
     from ..walk import Walk, simulate_walk
     from ._common import compile_notice
     try:
         with compile_notice():
+            prepare_kernels()       # the body's, which the files need after the walk (the same notice)
             return simulate_walk(spec, progress=not quiet, on_step=writer.step), "ok", None
     except ConvergenceError as exc:
         return exc.partial, "failed", exc
