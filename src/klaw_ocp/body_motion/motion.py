@@ -280,9 +280,10 @@ def prepare_kernels() -> None:
     """Compile (the first time on a machine, in parallel) or load the body's compiled kernels now,
     rather than at the first frames: a command that solves does it inside its compile notice."""
     libraries = (leg_angles.library(), stance_kernel.library(), *swing_kernel.libraries())
-    prefetch([library.load for library in libraries])
+    if any(library.will_compile() for library in libraries):
+        prefetch([library.load for library in libraries])
     for library in libraries:
-        library.load()
+        library.load()          # (loaded once a process: later calls return at once)
 
 
 def body_motion(walk, fps: float) -> BodyMotion:
