@@ -138,7 +138,8 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`),
     # then every step's guard grid and the frames: their rows at once, the ends' first (they give
     # the offsets the others' rows carry)
-    m, ends = len(swung_steps(walk)), len(swung_steps(walk)) + len(steps) - 1
+    m = len(swung_steps(walk))
+    ends = m + len(steps) - 1
     rows = _leg_rows(swing, schedules, np.concatenate([at_step, step]), np.concatenate([at_t, tau]),
                      np.concatenate([at_model, model]), np.concatenate([at_own, own]))
     toe_off, landing = _end_offsets(walk, legs_at(rows[:ends], shared, ends=True), toe_off_feet, m)
@@ -153,9 +154,9 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
                              grid["shank"], grid["theta5"], grid["theta6"], window, grid["required"], grid["knee"])
     turn, lift, knee = (np.empty(len(tau)) for _ in range(3))
     turn[order], lift[order], knee[order] = guarded
-    rows = np.empty((len(tau), len(FOOT_COLUMNS)))
-    rows[:, _FOOT_TAU], rows[:, _FOOT_SCHEDULE] = tau, schedules[step]
-    rows[:, _FOOT_REST] = np.column_stack([knee, turn, lift, leg["shank"][g:], leg["ankle"][g:], own])
-    foot = feet_at(rows, shared)
+    foot_rows = np.empty((len(tau), len(FOOT_COLUMNS)))
+    foot_rows[:, _FOOT_TAU], foot_rows[:, _FOOT_SCHEDULE] = tau, schedules[step]
+    foot_rows[:, _FOOT_REST] = np.column_stack([knee, turn, lift, leg["shank"][g:], leg["ankle"][g:], own])
+    foot = feet_at(foot_rows, shared)
     return {"hip": own, "knee": foot["knee"], "ankle": foot["ankle"], "heel": foot["heel"],
             "metatarsal": foot["metatarsal"], "toe": foot["toe"]}
