@@ -19,9 +19,8 @@ once on the whole, and the one operation that runs along a step's grid, the smoo
 parabola convolutions, runs on one row per step of a padded array (the padding is -inf for the
 maximum and +inf for the minimum, which each passes over), so nothing crosses from one step into
 the next. Only the interpolation from each grid to the step's own times stays a call per step
-(np.interp). :func:`lifted_foot`, :func:`grounded_angles_on_grid`, :func:`smooth_turn` and
-:func:`ankle_lift` are the one-step forms.
-"""
+(np.interp). :func:`lifted_foot`, :func:`grounded_angles_on_grid`, :func:`smooth_turn`,
+:func:`ankle_lift`: the one-step forms."""
 from __future__ import annotations
 
 import math
@@ -85,15 +84,9 @@ def _ground_window(body, theta6, ankle_y, shank) -> tuple:
     return lower + to_theta5, upper + to_theta5, fits, math.pi + to_theta5
 
 
-def _ground_clip(body, theta5, theta6, ankle_y, shank) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`ground_limits` of the scheduled angles ``theta5``, ``theta6`` (n,)."""
-    return _clip_to(_ground_window(body, theta6, ankle_y, shank), theta5), theta6
-
-
 def _clip_to(window: tuple, theta5):
     """``theta5`` clipped to a :func:`_ground_window` ``window`` (the level sole where none fits)."""
-    lowest, highest, fits, level = window
-    return np.where(fits, clamp(theta5, lowest, highest), level)
+    return np.where(window[2], clamp(theta5, window[0], window[1]), window[3])
 
 
 def lowest_sole_point(body, ankle_y, shank_angle, theta5, theta6) -> np.ndarray:
@@ -112,9 +105,9 @@ def ground_limits(body, foot: SwingFoot, t, ankle_y, shank_angle, knee=None) -> 
     those angles, the range around the level sole, which fits whenever the ankle is at least l9 up
     (the two ground limits can leave two ranges; this one moves continuously with the leg). Below
     l9 no foot fits, and the sole is level, the least deep."""
-    t = np.asarray(t, float)
-    return _ground_clip(body, *foot.angles(t, knee), np.broadcast_to(ankle_y, t.shape),
-                        np.broadcast_to(shank_angle, t.shape))
+    theta5, theta6 = foot.angles(np.asarray(t, float), knee)
+    window = _ground_window(body, theta6, np.broadcast_to(ankle_y, theta5.shape), np.broadcast_to(shank_angle, theta5.shape))
+    return _clip_to(window, theta5), theta6
 
 
 class _Grids:
@@ -214,6 +207,10 @@ def _windows(padded: np.ndarray, width: int) -> np.ndarray:
 #: 256 times it) where the smooth one, brought to 0 at the swing's ends, cannot meet its
 #: requirement in time (its rate stays within GUARD_RATE): the foot out of the ground first
 GUARD_ESCALATIONS = 4
+#: a requirement no larger than this (rad) is met already: the turn that meets a limit exactly
+#: leaves the clip a last-bit residue of either sign (1e-16 to 1e-15 in every step's second turn
+#: and often in the lift), for which the envelopes would be computed to turn the foot by as much
+GUARD_ROUND_OFF = 1e-12
 
 
 def _smooth_turn(grids: _Grids, required, acceleration=GUARD_ACCELERATION, escalations=GUARD_ESCALATIONS,
@@ -232,14 +229,14 @@ def _smooth_turn(grids: _Grids, required, acceleration=GUARD_ACCELERATION, escal
     out = np.zeros(len(grids.t))
     for sign in (1.0, -1.0):
         part = np.maximum(sign * required, 0.0)
-        if not (part > 0).any():
+        if not (part > GUARD_ROUND_OFF).any():
             continue
         cone = grids.cone_envelope(part, GUARD_RATE)
         per_step = np.full(len(grids.lengths), float(acceleration))
         for attempt in range(escalations + 1):
             # the fastest rise from an end: at the acceleration, then at the rate
             turn = np.minimum(grids.smooth_envelope(cone, per_step), grids.fastest_rise(per_step))
-            short = turn < part - 1e-12
+            short = turn < part - GUARD_ROUND_OFF
             if not short.any():
                 break
             per_step[np.unique(grids.row[short])] *= 4.0
