@@ -90,7 +90,9 @@ def evaluate(kernel, block: int, rows: np.ndarray, constants: np.ndarray, output
     n, width = len(rows), sum(outputs.values())
     blocks = -(-n // block)
     if blocks * block != n:
-        rows = np.concatenate([rows, np.broadcast_to(rows[:1], (blocks * block - n, rows.shape[1]))])
+        padded = np.empty((blocks * block, rows.shape[1]))
+        padded[:n], padded[n:] = rows, rows[0]       # (np.broadcast_to's Python checks cost more)
+        rows = padded
     out = [kernel(rows[b * block:(b + 1) * block], constants)[0].reshape(block, width) for b in range(blocks)]
     out = (np.concatenate(out) if len(out) > 1 else out[0])[:n] if out else np.zeros((0, width))
     columns, start = {}, 0

@@ -255,6 +255,8 @@ def _ankle_lift(body, grids: _Grids, hip, ankle, lowest, flexion=None):
         flexion = knee_flexion_for_reach(body, np.hypot(dx, drop))
     wanted = knee_flexion_for_reach(body, np.hypot(dx, np.maximum(drop - need, 0.0))) - flexion
     bend = _smooth_turn(grids, np.where(need > 0, np.maximum(wanted, 0.0), 0.0), final=True)
+    if not (bend > 0).any():
+        return np.zeros(len(bend))          # (what the lift below is without a bend)
     reach = reach_for_knee_flexion(body, flexion + bend)
     # (>= 0: where the bend is a round-off above 0, the distance's round-off could lower the ankle)
     return np.where(bend > 0, np.maximum(drop - np.sqrt(np.maximum(reach * reach - dx * dx, 0.0)), 0.0), 0.0)
