@@ -7,6 +7,7 @@ import pytest
 
 from klaw_ocp.body import Body
 from klaw_ocp.body_motion import leg_angles, pose
+from klaw_ocp.body_motion.kernel_forms import mapped_library
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, SIDES, forward_kinematics, zxy_angles
 from test_skeleton import leg_points, random_pose
 
@@ -68,7 +69,7 @@ def test_compiled_angles_are_numpys_geometry(n):
 def test_casadi_evaluation_gives_the_compiled_numbers(monkeypatch):
     root, angles, _, legs = _pose(40)
     compiled = pose.skeleton_angles(BODY, root, angles[:, :3], legs, None)
-    library = leg_angles.KernelLibrary(["test"], ["body_leg_angles_block"], leg_angles._build, what="body kernel")
+    library = mapped_library(["test"], leg_angles.frame_function, {"body_leg_angles_block": leg_angles.BLOCK})
     monkeypatch.setattr(leg_angles, "_kernel", lambda: library.functions()["body_leg_angles_block"])
     monkeypatch.setenv("KLAW_OCP_JIT", "0")
     by_casadi = pose.skeleton_angles(BODY, root, angles[:, :3], legs, None)

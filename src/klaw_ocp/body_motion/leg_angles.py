@@ -32,6 +32,7 @@ import numpy as np
 
 from ..casadi_builds import built_once
 from ..kernels import KernelLibrary, source_key
+from .kernel_forms import evaluate, mapped_library
 from . import skeleton
 from .skeleton import ANGLE_NAMES, JOINTS, SIDES
 
@@ -110,19 +111,11 @@ def frame_function() -> ca.Function:
                        ["frame", "offsets"], list(OUTPUTS))
 
 
-def _build(compiling: bool) -> list:
-    """The frame's function mapped over BLOCK frames (a loop in the generated C), the offsets shared."""
-    fn = frame_function()
-    args = [ca.MX.sym("frames", 48, BLOCK), ca.MX.sym("offsets", 6)]
-    return [ca.Function("body_leg_angles_block", args, fn.map(BLOCK, "serial")(*args), fn.name_in(), list(OUTPUTS))]
-
-
 @built_once
 def library() -> KernelLibrary:
     """The kernel's library (built once; :meth:`~klaw_ocp.kernels.KernelLibrary.load` compiles it)."""
     # the key: the source of the modules whose code builds the expressions (the joints' signs)
-    return KernelLibrary([source_key(sys.modules[__name__], skeleton), BLOCK], ["body_leg_angles_block"], _build,
-                         what="body kernel")
+    return mapped_library([source_key(sys.modules[__name__], skeleton)], frame_function, {"body_leg_angles_block": BLOCK})
 
 
 @lru_cache(maxsize=None)
@@ -134,15 +127,8 @@ def leg_angles(rotation: np.ndarray, centre: np.ndarray, points: np.ndarray, off
     """The kernel over n frames: pelvis rotations (n, 3, 3), centres (n, 3), both legs' points
     (2 (right, left), 6 (POINTS), n, 3), the hips' offsets (6,) -> OUTPUTS name -> (n, size)."""
     n = len(centre)
-    blocks = -(-n // BLOCK)
-    frames = np.empty((blocks * BLOCK, 48))
-    frames[:n, :9] = rotation.reshape(n, 9)
-    frames[:n, 9:12] = centre
-    frames[:n, 12:].reshape(n, 2, 6, 3)[...] = points.transpose(2, 0, 1, 3)
-    frames[n:] = frames[:1]           # the last block filled with copies of the first frame (any valid one)
-    kernel, out = _kernel(), {name: [] for name in OUTPUTS}
-    for b in range(blocks):
-        for name, value in zip(OUTPUTS, kernel(frames[b * BLOCK:(b + 1) * BLOCK], offsets)):
-            out[name].append(value.reshape(BLOCK, -1))
-    return {name: (np.concatenate(values) if len(values) > 1 else values[0])[:n] if values else np.zeros((0, OUTPUTS[name]))
-            for name, values in out.items()}
+    frames = np.empty((n, 48))
+    frames[:, :9] = rotation.reshape(n, 9)
+    frames[:, 9:12] = centre
+    frames[:, 12:].reshape(n, 2, 6, 3)[...] = points.transpose(2, 0, 1, 3)
+    return evaluate(_kernel(), BLOCK, frames, offsets, OUTPUTS)

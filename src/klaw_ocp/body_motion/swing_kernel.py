@@ -34,7 +34,9 @@ from ..dynamics.points import foot_points_sx
 from ..kernels import source_key
 from ..kinematics import swing_foot
 from ..kinematics.swing_foot import SCHEDULE_FIELDS, schedule_angles
+from . import walk_samples
 from .kernel_forms import clamp, evaluate, knee_flexion_for_reach, leg_ik, mapped_library, round_half_even, smoothstep
+from .walk_samples import hermite_sum
 
 #: the fraction of swing1 over which the body's swing leg blends from the virtual leg's toe-off
 #: posture (the model's ankle reached from the leg's own hip) into the dynamic knee angle
@@ -59,14 +61,6 @@ LEG_OUTPUTS = {"model_shank": 1, "model_ankle": 2, "timed_theta5": 1, "shank": 1
 FOOT_OUTPUTS = {"theta5": 1, "theta6": 1, "ankle": 2, "heel": 2, "metatarsal": 2, "toe": 2, "knee": 2}
 #: samples per call: a step's guard grid and frames (about 250), its ends (a few), its frames
 LEG_BLOCK, ENDS_BLOCK, FOOT_BLOCK = 128, 8, 32
-
-
-def _hermite(s, h, v0, r0, v1, r1):
-    # walk_samples.hermite_sum's operations (the factors used twice computed once)
-    rest, squared = (1 - s) ** 2, s * s
-    h00, h10 = (1 + 2 * s) * rest, s * rest
-    h01, h11 = squared * (3 - 2 * s), squared * (s - 1)
-    return h00 * v0 + h10 * h * r0 + h01 * v1 + h11 * h * r1
 
 
 def ground_window(c, theta6, ankle_y, shank) -> tuple:
@@ -100,7 +94,7 @@ def leg_function() -> ca.Function:
     start = x["u_0"]
     h = x["u_1"] - start
     s = (x["u"] - start) / h
-    theta3, theta4 = (_hermite(s, h, x[f"{v}_0"], x[f"rate{k}_0"], x[f"{v}_1"], x[f"rate{k}_1"])
+    theta3, theta4 = (hermite_sum(s, h, x[f"{v}_0"], x[f"rate{k}_0"], x[f"{v}_1"], x[f"rate{k}_1"])
                       for v, k in (("theta3", 3), ("theta4", 4)))
     # the model's leg from its swing hip (leg_fk)
     model_shank = theta3 + theta4
@@ -154,7 +148,7 @@ def libraries() -> tuple:
     """The kernels' libraries, the legs' and the feet's (built once; :meth:`~klaw_ocp.kernels.KernelLibrary.load`
     compiles them)."""
     # the key: the source of every module whose code builds the expressions
-    key = [source_key(sys.modules[__name__], swing_foot, points), LEG_COLUMNS, FOOT_COLUMNS, CONSTANTS]
+    key = [source_key(sys.modules[__name__], swing_foot, points, walk_samples), LEG_COLUMNS, FOOT_COLUMNS, CONSTANTS]
     return (mapped_library(key, leg_function, {"body_swing_legs": LEG_BLOCK, "body_swing_ends": ENDS_BLOCK}),
             mapped_library(key, foot_function, {"body_swing_feet": FOOT_BLOCK}))
 
@@ -164,10 +158,11 @@ def _kernels() -> dict:
     return {name: fn for library in libraries() for name, fn in library.functions().items()}
 
 
-def constants(body) -> list:
-    """:data:`CONSTANTS` of a body."""
-    return [body.l3, body.l4, body.l8, body.l9, body.l12, body.l13, body.metatarsal_reach,
-            float(np.hypot(body.l8, body.l9)), math.atan2(body.l9, body.l8)]
+@lru_cache(maxsize=16)
+def constants(body) -> tuple:
+    """:data:`CONSTANTS` of a body (one per body, shared)."""
+    return (body.l3, body.l4, body.l8, body.l9, body.l12, body.l13, body.metatarsal_reach,
+            float(np.hypot(body.l8, body.l9)), math.atan2(body.l9, body.l8))
 
 
 def legs_at(rows, shared, ends: bool = False) -> dict:
