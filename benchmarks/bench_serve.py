@@ -40,7 +40,8 @@ import numpy as np
 from klaw_ocp.config import ExperimentConfig
 from klaw_ocp.serve.protocol import step_text, strips_text
 from klaw_ocp.solvers.thread_safety import solving
-from klaw_ocp.stepwise import ReadyStep, StepwiseWalk, step_frames
+from klaw_ocp.step_body import step_frames
+from klaw_ocp.stepwise import ReadyStep, StepwiseWalk
 from reference_machine import REFERENCE_STANCE_SOLVE_MS, slower_than_reference
 
 SPEEDS_KMH = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
@@ -62,7 +63,8 @@ def timed_step(live: StepwiseWalk, strips: dict) -> dict:
     with solving():
         live._ahead = live._loop.begin_next()      # noqa: SLF001
     t1 = time.perf_counter()
-    frames = step_frames(live.walk, k, live.spec.fps, live._ahead)     # noqa: SLF001
+    frames = step_frames(live.walk, k, live.spec.fps, live._ahead, live._prepared)     # noqa: SLF001
+    live._prepared = None                          # noqa: SLF001
     t2 = time.perf_counter()
     live._shown += 1                               # noqa: SLF001
     ready = ReadyStep(k, live.walk.steps[k], live._rows.pop(k), frames, t2 - t0, False)     # noqa: SLF001

@@ -36,7 +36,10 @@ ALLOWED = {
                      "result_files", "figures", "compare", "choices", "sweep_pool", "stop_signals"},
     "reproduce": BASE | {"config", "config_paths", "config_yaml", "walk", "control", "solvers", "results",
                          "result_files", "figures", "compare", "choices"},
-    "stepwise": BASE | {"walk", "step_loop", "body_motion", "config", "control", "gait", "results", "solvers"},
+    "stepwise": BASE | {"walk", "step_loop", "step_body", "body_motion", "config", "control", "gait", "results",
+                        "solvers"},
+    # a step's body frames on its window of the walk (stepwise's)
+    "step_body": BASE | {"walk", "body_motion", "control"},
     # the web playground: it drives a stepwise walk; nothing below it knows of the web
     "serve": BASE | {"stepwise", "config", "gait", "body_motion", "result_files", "choices"},
 }

@@ -13,7 +13,8 @@ import pytest
 
 from klaw_ocp.body import Body
 from klaw_ocp.body_motion import ANGLES_COLUMNS, body_motion
-from klaw_ocp.body_motion.motion import swing_hips, toe_off_feet
+from klaw_ocp.body_motion.motion import swing_hips
+from klaw_ocp.body_motion.stance_legs import toe_off_feet
 from klaw_ocp.body_motion.skeleton import ANGLE_NAMES, forward_kinematics
 from klaw_ocp.body_motion.stance_legs import stance_frames
 from klaw_ocp.body_motion.swing_kernel import TOE_OFF_BLEND

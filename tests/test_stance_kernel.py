@@ -83,19 +83,19 @@ def numpy_stance_frames(feet, which, t, hips):
 def asked():
     """Every stance_frames call the body makes for four short walks (slow, fast, from rest to rest)."""
     calls = []
+    walks = [{"speed": 0.5, "steps": 5, "start_from_rest": True, "end_at_rest": True}, {"speed": 5.0, "steps": 4},
+             {"speed": 9.0, "steps": 4}, {"speed": 3.0, "steps": 4, "start_from_rest": True}]
+    original = stance_legs.stance_frames
 
     def spy(*args):
         calls.append(args)
-        return stance_legs.stance_frames(*args)
-    walks = [{"speed": 0.5, "steps": 5, "start_from_rest": True, "end_at_rest": True}, {"speed": 5.0, "steps": 4},
-             {"speed": 9.0, "steps": 4}, {"speed": 3.0, "steps": 4, "start_from_rest": True}]
-    original = motion.stance_frames
-    motion.stance_frames = spy
+        return original(*args)
+    stance_legs.stance_frames = spy        # (ground_legs calls it: every stance of the walk at once)
     try:
         for walk in walks:
             motion.body_motion(simulate_walk({"name": "kernel", "body": {"height": 1.8, "mass": 80.0}, "walk": walk}), 100.0)
     finally:
-        motion.stance_frames = original
+        stance_legs.stance_frames = original
     return calls
 
 

@@ -14,9 +14,9 @@ import numpy as np
 from .body import Body
 from .control.periodic_start import periodic_start
 from .control.step import StanceStage, StepController, StepInput, StepResult
-from .control.step_stages import stance_leg_rules
-from .dynamics import heel_strike_map
-from .kinematics.virtual_leg import hind_foot_at_rest
+from .control.step_stages import landing_stance_foot, stance_leg_rules
+from .dynamics import heel_strike_map, stance_hips
+from .kinematics.virtual_leg import StanceFoot, hind_foot_at_rest
 
 
 def _first_input(controller: StepController, spec) -> StepInput:
@@ -89,6 +89,22 @@ class StepLoop:
         stage, following = self.pending
         self.pending = None
         return self._advance(self.controller.solve_swing_stage(stage), following)
+
+    def next_landing(self) -> StanceFoot | None:
+        """The foot the step solved last lands on: the next step's stance foot as its heel strike
+        fixes it (``landing_foot`` of :meth:`begin_next`'s stance stage), from that step's plan and
+        input as they stand; None when no step follows, or one is begun. Known before the next
+        stance is solved (its first state is the heel-strike map's, which the solvers keep to the
+        bit): the live playground builds the body of the step solved last with it while the page
+        shows the step before, and checks it against the stance stage's once that is solved (the
+        plan may be revised in between: docs/serve.md)."""
+        if self.current is None or self.pending is not None:
+            return None
+        plan, body, inp = self.current[0], self.controller.body, self.inp
+        origin = np.array([inp.origin_x, body.l9])
+        hip = stance_hips(body, inp.x0[None], origin)[0][0]       # (solve_stance_stage's hips[0], one row)
+        return landing_stance_foot(body, plan.attributes, plan, inp.x0, hip, inp.origin_x, inp.stance_standing,
+                                   inp.next_t_ds)
 
     def _begin(self):
         """The next step's plan, index and the plan after it (principle 1: the high level before

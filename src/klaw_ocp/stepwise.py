@@ -14,8 +14,9 @@ so the walk is a schedule with an entry at every step from its first change to i
 steps, to the bit.
 
 Each step's body frames (the root and the 56 angles at the walk's fps) are computed when the step
-after it is solved, on a window of those few steps (:func:`step_frames`): a step's stance leg is
-completed by the next step's double support, so a step's frames are final one step later.
+after it is solved, on a window of those few steps (:func:`klaw_ocp.step_body.step_frames`): a
+step's stance leg is completed by the next step's double support, so a step's frames are final
+one step later; all the rest of them is built before (:func:`klaw_ocp.step_body.prepare_step_frames`).
 """
 from __future__ import annotations
 
@@ -23,9 +24,7 @@ import math
 import time
 from dataclasses import dataclass, replace
 
-import numpy as np
-
-from .body_motion.motion import BodyMotion, Samples, body_motion_at, prepare_kernels
+from .body_motion.motion import BodyMotion, prepare_kernels
 from .config import ExperimentConfig, check_stance_method, check_walk_size
 from .config import MAX_FRAMES
 from .control.gains import control_gains
@@ -39,6 +38,7 @@ from .gait.plan import MAX_STEPS, MAX_WALK_S, PARAMETER_KEYS, plan_step
 from .results import step_table
 from .solvers import make_solver
 from .solvers.thread_safety import solving
+from .step_body import PreparedStep, prepare_step_frames, step_frames
 from .step_loop import StepLoop, with_next_plan
 from .walk import Walk, walk_spec
 
@@ -56,31 +56,6 @@ class ReadyStep:
     frames: BodyMotion
     solve_s: float
     closing: bool
-
-
-def step_frames(walk: Walk, k: int, fps: float, ahead: StanceStage | None = None) -> BodyMotion:
-    """Step ``k``'s frames of ``walk``'s body, t = i/fps in [t_start_k, t_start_k+1) (the last step's up
-    to the walk's end), equal to :func:`klaw_ocp.body_motion.body_motion`'s at those frames.
-
-    The body at a frame reads its own step and the next (the stance leg completed by the next
-    step's double support, the swing leg's landing on the next stance foot), so it is built on a
-    window from step k (k - 1 for an odd k: the window keeps the steps' legs, right for even
-    steps, left for odd) to step k + 1. Of step k + 1 it reads the stance half alone: ``ahead``,
-    that half (:class:`~klaw_ocp.control.step.StanceStage`) where ``walk`` ends with step k and its
-    swings are not solved yet."""
-    steps = walk.steps if ahead is None else [*walk.steps, ahead]
-    last = k == len(steps) - 1
-    end = walk.duration if last else steps[k + 1].t_start      # (the last is never ``ahead``'s step)
-    i = np.arange(max(math.floor(steps[k].t_start * fps) - 1, 0), math.floor(end * fps + 1e-9) + 2)
-    if last:
-        i = i[i <= math.floor(end * fps + 1e-9)]     # frame_times' last frame
-    t = i / fps                                     # as frame_times makes them
-    # each frame on its own side of the heel strikes, as locate_steps puts it
-    t = t[(t >= steps[k].t_start) & ((t < end) if not last else True)]
-    start = k - (k % 2)
-    window = Walk(walk.spec, steps[start:k + 2])
-    samples = Samples(t, np.full(len(t), k - start), t - steps[k].t_start)
-    return body_motion_at(window, samples)
 
 
 class StepwiseWalk:
@@ -140,6 +115,9 @@ class StepwiseWalk:
         self._shown = 0          # the next step to hand out with its frames
         #: the stance half of the step after the last one solved whole (:meth:`finish_ahead`)
         self._ahead: StanceStage | None = None
+        #: the body of the last step solved whole, built before the next step's stance half
+        #: (:meth:`finish_ahead`): next_step finishes it (:func:`step_frames`)
+        self._prepared: PreparedStep | None = None
         #: each solved step's rows of dynamics.csv until it is handed out
         self._rows: dict = {}
         #: the error of the step that failed, which ended the walk (None while it goes on)
@@ -286,7 +264,8 @@ class StepwiseWalk:
             return None
         if not self.ended and len(self.walk.steps) == k + 1:
             self._begin_next()
-        frames = step_frames(self.walk, k, self.spec.fps, self._ahead)
+        frames = step_frames(self.walk, k, self.spec.fps, self._ahead, self._prepared)
+        self._prepared = None
         result = self.walk.steps[k]
         self._shown += 1
         return ReadyStep(k, result, self._rows.pop(k), frames, time.perf_counter() - t0, closing=self._closing_at == k)
@@ -313,7 +292,8 @@ class StepwiseWalk:
         before it needed that half alone), if any, and return that step. The server calls it once
         it has sent a step, while the page shows the one before; :meth:`next_step` calls it first
         otherwise. Either way the steps are solved in the same order, to the same numbers. The
-        step's rows of dynamics.csv are made here too: they read that step alone."""
+        step's rows of dynamics.csv are made here too (they read that step alone), and its body as
+        far as it does not wait for the next step's stance half (:func:`prepare_step_frames`)."""
         if self._ahead is None:
             return None
         self._ahead = None
@@ -327,6 +307,12 @@ class StepwiseWalk:
         # its rows of dynamics.csv read the step alone (not the plan after it, which may still
         # change the stance leg's rules): final now
         self._rows[result.index] = step_table(result, self.body)
+        # and its body as far as the steps solved fix it, the next step's stance foot as its plan
+        # stands: the ask then waits only for what that step's stance half completes
+        landing = self._loop.next_landing()
+        if landing is not None:
+            self._prepared = prepare_step_frames(self.walk, result.index, self.spec.fps, landing,
+                                                 self._loop.current[0].t_start)
         return result
 
     def rows(self, k: int) -> dict:

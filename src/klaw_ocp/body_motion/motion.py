@@ -24,20 +24,17 @@ import numpy as np
 
 from ..gait.plan import stance_leg
 from ..kernels import prefetch
-from ..kinematics.leg_geometry import leg_ik
 from ..kinematics.pelvis import PelvisSchedule
 from . import leg_angles, stance_kernel, swing_kernel
 from .pose import LegPoints, UpperBody, hip_positions, pelvis_rotations, set_upper_body_angles, skeleton_angles
 from .skeleton import ANGLE_NAMES, SIDES
-from .stance_legs import stance_frames
-from .swing_legs import swing_legs, swing_samples
+from .stance_legs import POINTS, OpenStance, ground_legs, open_points
+from .swing_legs import landing_pose, swing_legs, swing_samples
 from .upper_body import StepWindow, lateral_displacement, step_amplitudes, upper_body_motion
 from .walk_samples import frame_times, locate_steps, stance_at, stance_curves
 
 #: The columns of angles.csv: time (s), the root (pelvis centre, m), then the 56 angles (degrees).
 ANGLES_COLUMNS = ("time", "root_x", "root_y", "root_z") + ANGLE_NAMES
-_POINTS = ("hip", "knee", "ankle", "heel", "metatarsal", "toe")
-_FOOT = ("ankle", "heel", "metatarsal", "toe")
 _HIP_FLEXION = {side: ANGLE_NAMES.index(f"{s}_hip_flexion") for s, side in SIDES}
 
 
@@ -158,86 +155,6 @@ def leg_planes(walk, samples: Samples, pelvis_angles: np.ndarray, pieces: WalkPi
     return LegPlanes(foot_z, {side: centre + offsets[side] for _, side in SIDES}), centre, lean, hip_sim
 
 
-def ground_legs(walk, samples: Samples, hips: dict, toe_off_hips: np.ndarray | None = None):
-    """The legs while their feet are on the ground: the virtual leg (§4.2) of each stance, from its
-    heel strike through the next step's double support to toe-off, evaluated on its own stance
-    times (so that its foot stays planted) with its hips ``hips[side]`` (n, 2) in its plane.
-
-    Returns (side -> point name -> (n, 2), filled on the rows it covers; side -> those rows (bool)),
-    and with ``toe_off_hips`` (steps, 2), each step's hind leg's own hip at its toe-off, also
-    :func:`toe_off_feet` of them, evaluated in the same pass (each call of the virtual legs costs
-    mostly its fixed overhead)."""
-    n = len(samples.t)
-    t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
-    in_double_support = samples.tau <= t_ds[samples.step]
-    # each stance foot with the step it lands in (step 0's hind foot stood before the walk began):
-    # foot f is step f - 1's stance foot; its side alternates as stance_leg's does
-    feet = [walk.steps[0].hind_foot] + [walk.stance_foot(k) for k in range(len(walk.steps))]
-    right = np.array([stance_leg(k) == "right" for k in range(-1, len(walk.steps))])
-    # every frame is on its own step's stance foot, and in the double support also on the
-    # previous step's: the rows of each foot in turn, its own step's first (as a stable sort of
-    # the feet leaves them), each in order
-    later = np.flatnonzero(in_double_support)
-    on_foot = np.concatenate([samples.step + 1, samples.step[later]])
-    order = np.argsort(on_foot, kind="stable")
-    which, rows = on_foot[order], np.concatenate([np.arange(n), later])[order]
-    own = order < n
-    tau = samples.tau[rows]
-    # the stance foot's own times: its step's tau, then t_step on in the next step's. The walk's last
-    # stance leg has no double support to complete its rules, and the walk ends at the instant it
-    # would begin: that last instant keeps the single support's pitch (a round-off before t_step)
-    complete = np.array([f.complete for f in feet])
-    t_step = np.array([f.t_step for f in feet])
-    stance_times = np.where(complete[which], tau, np.minimum(tau, np.nextafter(t_step, 0.0)[which]))
-    t_leg = np.where(own, stance_times, t_step[which] + tau)
-    leg_hips = np.where(right[which][:, None], hips["right"][rows], hips["left"][rows])
-    if toe_off_hips is not None:
-        # step j's hind foot is feet[j] (step 0's stood before the walk, step j's is step j - 1's stance)
-        which = np.concatenate([which, np.arange(len(walk.steps))])
-        t_leg = np.concatenate([t_leg, [s.hind_foot.t_toe_off for s in walk.steps]])
-        leg_hips = np.concatenate([leg_hips, toe_off_hips])
-    legs = stance_frames(feet, which, t_leg, leg_hips)
-    pull = _overreach_pull(legs)
-    # the knee of a leg whose foot hangs from it: the inverse kinematics of the foot's ankle
-    # (where no leg overreaches, np.where would pick every one of legs.knee: the inverse kinematics skipped)
-    over = legs.overreach[:, None] > 0
-    knee = np.where(over, leg_ik(walk.spec.body, legs.hip, legs.ankle + pull)[2], legs.knee) if over.any() else legs.knee
-    # every point of both legs in one array (side, point, frame): a row per side and frame
-    mine = slice(0, len(rows))
-    side = np.where(right[which[mine]], 0, 1)
-    filled = np.full((2, len(_POINTS), n, 2), np.nan)
-    filled[side, :, rows] = np.stack([(knee if name == "knee" else getattr(legs, name))[mine]
-                                      + (pull[mine] if name in _FOOT else 0.0) for name in _POINTS], axis=1)
-    on_ground = np.zeros((2, n), bool)
-    on_ground[side, rows] = True
-    points = {name: dict(zip(_POINTS, filled[i])) for i, (_, name) in enumerate(SIDES)}
-    covered = {name: on_ground[i] for i, (_, name) in enumerate(SIDES)}
-    if toe_off_hips is None:
-        return points, covered
-    return points, covered, ((legs.ankle + pull)[len(rows):], legs.pitch[len(rows):])
-
-
-def _overreach_pull(legs) -> np.ndarray:
-    """(n, 2): where the hip is beyond the leg's reach of its foot (long steps, late in the double
-    support), the straight leg ends short of the foot's ankle: the foot hangs from it, its toe off
-    the ground a little early, rather than a shank stretched to the planted foot (the skeleton's
-    segments are rigid) and a leg that jumps to the swing's posture at toe-off. The foot's points
-    move by this."""
-    toward_hip = legs.hip - legs.ankle
-    return toward_hip * (legs.overreach / np.maximum(np.hypot(*toward_hip.T), 1e-12))[:, None]
-
-
-def toe_off_feet(walk, hips_at) -> tuple[np.ndarray, np.ndarray]:
-    """Each step's hind leg at its toe-off as the body shows it, its virtual leg on the leg's own
-    hip in its plane (the swing leg of the step starts from it): the ankle (steps, 2) and the
-    foot's pitch (steps,)."""
-    feet = [s.hind_foot for s in walk.steps]
-    every = np.arange(len(feet))
-    _, own = hips_at(every, np.array([s.plan.timings.t_ds for s in walk.steps]))
-    legs = stance_frames(feet, every, np.array([f.t_toe_off for f in feet]), own)
-    return legs.ankle + _overreach_pull(legs), legs.pitch
-
-
 def pelvis_angles_at(walk, t: np.ndarray) -> np.ndarray:
     """The pelvis's tilt, list and rotation (n, 3) (rad, docs/skeleton.md's signs: list + right hip
     up, rotation + right hip forward) at walk times ``t``: each step's schedule, whose rotation
@@ -298,15 +215,39 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     """The body at the frames ``samples`` (walk times within the walk's steps). Every frame reads
     only its own step and its neighbours (the stance leg's toe-off in the next step's double
     support, the hind leg's stance in the previous one), so a walk of a few steps around a step
-    gives that step's frames as the whole walk does (:func:`step_frames`)."""
-    body, attrs = walk.spec.body, walk.spec.attributes
+    gives that step's frames as the whole walk does (:func:`klaw_ocp.step_body.step_frames`)."""
+    return finish_body(walk, prepare_body(walk, samples))
+
+
+@dataclass(frozen=True)
+class PreparedBody:
+    """The body at frames before its legs' angles and the upper body (:func:`prepare_body`)."""
+    samples: Samples
+    centre: np.ndarray           # (n, 3) the pelvis centre (the root)
+    pelvis_angles: np.ndarray    # (n, 3)
+    rotation: np.ndarray         # the pelvis's rotations (:func:`.pose.pelvis_rotations`)
+    lean: np.ndarray             # (n,) θ2
+    planes: LegPlanes            # at the frames
+    points: np.ndarray           # (side, point, frame, 2) each leg in its plane (SIDES, POINTS order)
+    opened: OpenStance | None    # frames whose stance foot the window's next step completes
+    landing: tuple | None        # what the last step's swing read of the foot it lands on (swing_legs.landing_pose)
+
+
+def prepare_body(walk, samples: Samples, landing=None) -> PreparedBody:
+    """The body at the frames ``samples`` as far as the walk fixes it: the pelvis, the legs' planes,
+    the stance legs and the swing leg in their planes. ``landing``: where the walk is a window
+    whose next step is planned but not solved (the live playground builds a step's body while the
+    page shows the step before), the foot the last step's swing leg lands on
+    (:meth:`klaw_ocp.step_loop.StepLoop.next_landing`); the frames on the last stance foot are then
+    left open, for the next step's double support completes that foot's rules
+    (:func:`finish_body` with the window that has the next step's stance half)."""
     pieces = WalkPieces.of(walk)
     n, m = len(samples.t), len(walk.steps)
     t_ds = np.array([s.plan.timings.t_ds for s in walk.steps])
     # the steps whose swing leg the frames show: at any instant at most one leg swings, the stance
     # leg's other one once the double support is over (where ground_legs leaves it)
     swing_steps = np.unique(samples.step[~(samples.tau <= t_ds[samples.step])])
-    at_step, at_tau, grids = swing_samples(walk, swing_steps)
+    at_step, at_tau, grids = swing_samples(walk, swing_steps, landing)
     # the frames, every step's toe-off (toe_off_feet's samples) and the swing legs' own samples (as
     # swing_hips makes them) in one pass of the pelvis, the planes and the virtual legs: each pass
     # costs mostly its fixed overhead of some hundred small numpy calls, not its samples
@@ -321,13 +262,12 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
     own_both = np.where(pieces.stance_right[both.step][:, None], both_hips["left"], both_hips["right"])
     toe_off_hips, at_own = own_both[n:n + m], own_both[n + m:]
     planes = LegPlanes(planes.foot_z, {side: hip[:n] for side, hip in planes.hips.items()})
-    pelvis_angles, centre, lean, at_simulated, simulated = (pelvis_both[:n], centre[:n], lean[:n],
-                                                            simulated[n + m:], simulated[:n])
+    at_simulated, simulated = simulated[n + m:], simulated[:n]
     hips = {side: hip[:n] for side, hip in both_hips.items()}
-    in_plane, on_ground, toe_off = ground_legs(walk, samples, hips, toe_off_hips)
-    swinging = {side: np.flatnonzero(~on_ground[side]) for _, side in SIDES}
-    rows = np.concatenate(list(swinging.values()))
-    own = np.vstack([hips[side][r] for side, r in swinging.items()])     # (the frames' planes, once)
+    points, on_ground, toe_off, opened = ground_legs(walk, samples, hips, toe_off_hips, open_last=landing is not None)
+    swinging = [np.flatnonzero(~on_ground[i]) for i in range(len(SIDES))]
+    rows = np.concatenate(swinging)
+    own = np.vstack([hips[side][r] for (_, side), r in zip(SIDES, swinging)])     # (the frames' planes, once)
     # the model's swing hips at the swinging frames and at the swing legs' samples, in one pass
     k = len(rows)
     model_hips = model_swing_hips(walk, np.concatenate([samples.step[rows], at_step]),
@@ -335,16 +275,28 @@ def body_motion_at(walk, samples: Samples) -> BodyMotion:
                                   np.concatenate([simulated[rows], at_simulated]))
     hips_at = swing_hips(walk, lambda t: pelvis_angles_at(walk, t), pieces)   # (only if the swinging steps differ)
     swung = swing_legs(walk, samples.step[rows], samples.tau[rows], hips_at, toe_off, hips=(model_hips[:k], own),
-                       sampled=(swing_steps, (at_step, at_tau, grids), (model_hips[k:], at_own)))
-    start, legs, swung = 0, {}, np.stack([swung[name] for name in _POINTS])
-    for side, r in swinging.items():
-        points = np.stack([in_plane[side][name] for name in _POINTS])     # (point, frame, 2)
-        points[:, r] = swung[:, start:start + len(r)]
+                       sampled=(swing_steps, (at_step, at_tau, grids), (model_hips[k:], at_own)), landing=landing)
+    swung, start = np.stack([swung[name] for name in POINTS]), 0
+    for i, r in enumerate(swinging):
+        points[i][:, r] = swung[:, start:start + len(r)]
         start += len(r)
-        legs[side] = LegPoints(*planes.stacked_to_world(side, points))
-    t, root, pelvis = samples.t, centre, pelvis_angles
-    angles = skeleton_angles(body, root, pelvis, legs, None, rotation[:n])      # the upper body's angles below
+    return PreparedBody(samples, centre[:n], pelvis_both[:n], rotation[:n], lean[:n], planes, points, opened,
+                        None if landing is None else landing_pose(landing))
+
+
+def finish_body(walk, prepared: PreparedBody) -> BodyMotion:
+    """The body :func:`prepare_body` prepared, with its legs' angles and the upper body: ``walk``
+    the one prepared, or its window with the next step's stance half after it where frames were
+    left open (the upper body reads it too: the arm swing's amplitude moves to the next step's)."""
+    body, samples, points = walk.spec.body, prepared.samples, prepared.points
+    opened = prepared.opened
+    if opened is not None:
+        points = points.copy()
+        points[opened.side, :, opened.rows] = open_points(body, walk.stance_foot(opened.step), opened)
+    legs = {side: LegPoints(*prepared.planes.stacked_to_world(side, points[i])) for i, (_, side) in enumerate(SIDES)}
+    t, root, pelvis = samples.t, prepared.centre, prepared.pelvis_angles
+    angles = skeleton_angles(body, root, pelvis, legs, None, prepared.rotation)     # the upper body's angles below
     hip_flexion = {side: angles[:, column] for side, column in _HIP_FLEXION.items()}
-    upper = upper_body_motion(attrs, t, lean, hip_flexion, pelvis, arm_swing_at(walk, samples))
+    upper = upper_body_motion(walk.spec.attributes, t, prepared.lean, hip_flexion, pelvis, arm_swing_at(walk, samples))
     set_upper_body_angles(angles, upper)
     return BodyMotion(t, root, pelvis, legs, upper, angles)

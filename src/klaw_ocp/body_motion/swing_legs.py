@@ -66,14 +66,14 @@ def _leg_rows(curves, schedules, step, tau, model_hips, own_hips) -> np.ndarray:
     return rows
 
 
-def _end_offsets(walk, ends: dict, toe_off_feet, m: int) -> tuple[tuple, tuple]:
+def _end_offsets(walk, ends: dict, toe_off_feet, m: int, landing=None) -> tuple[tuple, tuple]:
     """How the body's swing leg differs from the model's where it meets a virtual leg, at each
-    swung step's toe-off and each step's heel strike but the last's (the model's leg there
-    ``ends``, :func:`.swing_kernel.leg_function`'s outputs): the ankle offsets (k, 2) and the turns
-    (rad, k) of the shank the scheduled foot is set on that give the virtual foot's pitch, as
-    (toe-off offsets, landing offsets), the landings' padded with zeros to the m swung steps (a
-    walk's last step has no next stance)."""
-    landing_ankles, landing_pitches = _landing_feet(walk)
+    swung step's toe-off and at the heel strikes that have a next stance (:func:`landing_feet`;
+    the model's leg there ``ends``, :func:`.swing_kernel.leg_function`'s outputs): the ankle
+    offsets (k, 2) and the turns (rad, k) of the shank the scheduled foot is set on that give the
+    virtual foot's pitch, as (toe-off offsets, landing offsets), the landings' padded with zeros to
+    the m swung steps (a walk's last step has no next stance)."""
+    landing_ankles, landing_pitches = _landing_feet(walk, landing)
     ankles = np.concatenate([toe_off_feet[0][:m], landing_ankles])
     pitches = np.concatenate([toe_off_feet[1][:m], landing_pitches])
     # the scheduled foot's backward sole direction is π/2 - shank + θ5; the virtual foot's, π - pitch
@@ -85,32 +85,46 @@ def _end_offsets(walk, ends: dict, toe_off_feet, m: int) -> tuple[tuple, tuple]:
              np.concatenate([shank_offset[m:], np.zeros(m - landings)])))
 
 
-def _landing_feet(walk) -> tuple[np.ndarray, np.ndarray]:
-    """The next stance's virtual leg at each step's heel strike: its ankle (steps - 1, 2) and foot
-    pitch (steps - 1,) (:mod:`klaw_ocp.kinematics.landing`: its knee may be flexed, its foot then a
-    little more toe-up about the same heel point). The walk's last step has no next stance."""
-    lands = [walk.stance_foot(k) for k in range(1, len(walk.steps))]
+def landing_feet(walk, landing=None) -> list:
+    """The feet the steps' swing legs land on: each next stance's foot (the walk's last step has
+    none), and ``landing`` (a :class:`~klaw_ocp.kinematics.virtual_leg.StanceFoot`) where the
+    walk's last step's next stance is planned but not solved yet (:func:`.motion.prepare_body`)."""
+    return [walk.stance_foot(k) for k in range(1, len(walk.steps))] + ([] if landing is None else [landing])
+
+
+def landing_pose(foot) -> tuple:
+    """All the swing leg reads of the foot it lands on (its heel-strike pose): the body, the
+    meta-off limit, the ankle's x and the heel-strike pitch."""
+    return foot.foot.body, foot.meta_off_theta6, foot.foot.ankle_x, float(foot.rocker_pitch)
+
+
+def _landing_feet(walk, landing=None) -> tuple[np.ndarray, np.ndarray]:
+    """The next stance's virtual leg at each heel strike that has one (:func:`landing_feet`): its
+    ankle (k, 2) and foot pitch (k,) (:mod:`klaw_ocp.kinematics.landing`: its knee may be flexed,
+    its foot then a little more toe-up about the same heel point)."""
+    poses = [landing_pose(f) for f in landing_feet(walk, landing)]
     # each landing's one ankle on floats (FootPieces.ankle_float: FlatFoot.ankle_at's numbers, held
     # to them by tests/test_few_sample_paths.py), not an array pass per landing
-    ankles = (np.array([foot_pieces(f.foot.body, f.meta_off_theta6).ankle_float(f.foot.ankle_x, float(f.rocker_pitch))
-                        for f in lands]) if lands else np.zeros((0, 2)))
-    return ankles, np.array([f.rocker_pitch for f in lands])
+    ankles = (np.array([foot_pieces(body, meta_off).ankle_float(ankle_x, pitch) for body, meta_off, ankle_x, pitch in poses])
+              if poses else np.zeros((0, 2)))
+    return ankles, np.array([pitch for *_, pitch in poses])
 
 
-def swing_samples(walk, swinging: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
+def swing_samples(walk, swinging: np.ndarray, landing=None) -> tuple[np.ndarray, np.ndarray, list]:
     """The samples (steps (k,), step-local times (k,)) at which :func:`swing_legs` asks for the
     hips when the steps ``swinging`` (unique, increasing) swing at its frames: every step's toe-off,
-    every heel strike but the last step's (it has no next stance) and each swinging step's guard
-    grid, in that order; and the guard grids."""
+    every heel strike that has a next stance (:func:`landing_feet`; ``landing`` as there) and each
+    swinging step's guard grid, in that order; and the guard grids."""
     steps, swung = walk.steps, swung_steps(walk)
     grids = [guard_grid(steps[k].swing_foot) for k in swinging]
-    m = len(swung)
-    return (np.concatenate([np.arange(m), np.arange(len(steps) - 1), np.repeat(swinging, [len(g) for g in grids])]),
-            np.concatenate([[s.swing_foot.t_toe_off for s in swung], [s.swing_foot.t_heel_strike for s in steps[:-1]]]
+    m, landings = len(swung), len(steps) - (landing is None)
+    return (np.concatenate([np.arange(m), np.arange(landings), np.repeat(swinging, [len(g) for g in grids])]),
+            np.concatenate([[s.swing_foot.t_toe_off for s in swung], [s.swing_foot.t_heel_strike for s in steps[:landings]]]
                            + grids), grids)
 
 
-def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None, sampled=None) -> dict:
+def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, hips=None, sampled=None,
+               landing=None) -> dict:
     """The swing leg in its plane at samples of steps ``step`` (n,) and step-local times ``tau``
     (n,), all after their step's toe-off: its points (n, 2), "hip" .. "toe".
     ``hips_at(step, tau)`` gives the planar model's swing hip and the swinging leg's own hip in its
@@ -118,7 +132,9 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     ``toe_off_feet``: the ankle (steps, 2) and the foot's pitch (steps,) of each step's virtual leg
     at its toe-off as the body shows it (:func:`.motion.toe_off_feet`), which the swing leg
     starts from; ``hips``: ``hips_at(step, tau)`` when the caller has it already; ``sampled``:
-    (the swinging steps, their :func:`swing_samples`, ``hips_at`` of those) when the caller has them.
+    (the swinging steps, their :func:`swing_samples`, ``hips_at`` of those) when the caller has them;
+    ``landing``: the foot the walk's last step lands on where its next step is not solved yet
+    (:func:`landing_feet`).
 
     Compiled (:mod:`.swing_kernel`) on either side of the ground guard's smooth turns: the model's
     leg and the timed foot at each step's toe-off and heel strike (the ends), then the body's leg,
@@ -131,20 +147,20 @@ def swing_legs(walk, step: np.ndarray, tau: np.ndarray, hips_at, toe_off_feet, h
     if sampled is not None and np.array_equal(sampled[0], swinging):
         (at_step, at_t, grids), (at_model, at_own) = sampled[1:]
     else:
-        at_step, at_t, grids = swing_samples(walk, swinging)
+        at_step, at_t, grids = swing_samples(walk, swinging, landing)
         at_model, at_own = hips_at(at_step, at_t)
     model, own = hips_at(step, tau) if hips is None else hips
-    # each swung step's toe-off, and the heel strike of each step before the last (a last step that
-    # is only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`),
-    # then every step's guard grid and the frames: their rows at once, the ends' first (they give
+    # each swung step's toe-off, and each heel strike that has a next stance (a last step that is
+    # only its stance half is where the one before it lands: :func:`.walk_samples.swung_steps`; a
+    # ``landing`` where none is in the walk yet), then every step's guard grid and the frames: their rows at once, the ends' first (they give
     # the offsets the others' rows carry)
     m = len(swung_steps(walk))
-    ends = m + len(steps) - 1
+    ends = m + len(steps) - (landing is None)
     rows = _leg_rows(swing, schedules, np.concatenate([at_step, step]), np.concatenate([at_t, tau]),
                      np.concatenate([at_model, model]), np.concatenate([at_own, own]))
-    toe_off, landing = _end_offsets(walk, legs_at(rows[:ends], shared, ends=True), toe_off_feet, m)
+    toe_off, lands = _end_offsets(walk, legs_at(rows[:ends], shared, ends=True), toe_off_feet, m, landing)
     legs_own, legs_step = rows[ends:, _OWN_HIP], np.concatenate([at_step[ends:], step])
-    rows[ends:, _OFFSETS] = np.column_stack([*toe_off[0].T, toe_off[1], *landing[0].T, landing[1]])[legs_step]
+    rows[ends:, _OFFSETS] = np.column_stack([*toe_off[0].T, toe_off[1], *lands[0].T, lands[1]])[legs_step]
     leg = legs_at(rows[ends:], shared)
     g = len(legs_step) - len(tau)
     grid = {name: value[:g] for name, value in leg.items()}

@@ -217,7 +217,8 @@ class StepController:
         stance_ctx = self.stance_context(plan, inp)
         origin = np.array([inp.origin_x, b.l9])
         hips, hip_vels = stance_hips(b, stance.states, origin)   # world hip at every stance node
-        landing = landing_stance_foot(b, a, plan, stance, hips, inp.origin_x, inp.stance_standing, inp.next_t_ds)
+        landing = landing_stance_foot(b, a, plan, stance.states[0], hips[0], inp.origin_x, inp.stance_standing,
+                                      inp.next_t_ds)
         pelvis = step_pelvis(b, a, plan, inp.stance_standing, inp.pelvis_rotation)
         other_hips, other_vels = pelvis.swing_side_hips(stance.t, hips, hip_vels)
         hind = completed_hind_leg(a, plan, stance, other_hips, inp.hind_foot)

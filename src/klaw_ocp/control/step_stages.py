@@ -178,23 +178,26 @@ def stance_leg_rules(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x
     the world hips at its nodes ``hips``: its heel-strike foot (:func:`landing_stance_foot`), its
     heel-off from the stance's hips. The next step's double support completes them
     (:func:`completed_hind_leg`)."""
-    return landing_stance_foot(body, attrs, plan, stance, hips, origin_x, standing, next_t_ds).find_heel_off(stance.t, hips)
+    return landing_stance_foot(body, attrs, plan, stance.states[0], hips[0], origin_x, standing,
+                               next_t_ds).find_heel_off(stance.t, hips)
 
 
-def landing_stance_foot(body: Body, attrs, plan, stance, hips: np.ndarray, origin_x: float,
+def landing_stance_foot(body: Body, attrs, plan, start: np.ndarray, hip: np.ndarray, origin_x: float,
                         standing: bool = False, next_t_ds: float | None = None) -> StanceFoot:
     """The stance leg's rules as its heel strike fixes them, before its heel-off is found
     (:meth:`~klaw_ocp.kinematics.virtual_leg.StanceFoot.find_heel_off`): its heel-strike foot from
     the first hip (flat from the start where it is ``standing``: the first step of a walk from
     rest), its knee's schedule to the toe-off that ends the next step's double support
     (``next_t_ds``; this step's where there is no next step). The swing leg of the step before
-    lands on this foot."""
+    lands on this foot. ``start``: the stance's first state (the heel-strike map's, which the
+    solvers keep to the bit), ``hip``: its world hip; so the foot is known before the stance is
+    solved (:meth:`klaw_ocp.step_loop.StepLoop.next_landing`)."""
     t_step = plan.timings.t_step
     t_ds_next = plan.timings.t_ds if next_t_ds is None else next_t_ds
     if standing:
         return StanceFoot.standing(body, attrs, origin_x, t_step, t_ds_next)
-    _, hip_velocity = stance_hip(body, stance.states[0], np.array([origin_x, body.l9]))
-    return StanceFoot.at_heel_strike(body, attrs, origin_x, hips[0], t_step, hip_velocity, t_ds_next)
+    _, hip_velocity = stance_hip(body, start, np.array([origin_x, body.l9]))
+    return StanceFoot.at_heel_strike(body, attrs, origin_x, hip, t_step, hip_velocity, t_ds_next)
 
 
 def completed_hind_leg(attrs, plan, stance, hips: np.ndarray, hind: StanceFoot) -> StanceFoot:
