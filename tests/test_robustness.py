@@ -126,6 +126,17 @@ def test_schedules_at_the_per_step_limits_converge(method, schedule):
     assert walk.status == "ok", walk.message
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_slowing_at_the_per_step_limits_to_the_slowest_walk_and_stopping_at_once_converges(method):
+    # 3 -> 0.5 km/h at the limits (0.83 km/h, 0.118 m a step), the closing step right after: plain
+    # shooting's closing stance did not reach the stop from the walking stance's push (control/step.py)
+    schedule = [{"step": 1, "speed": 3.0, "step_length": 0.6}, {"step": 4, "speed": 0.5, "step_length": 0.245}]
+    walk = simulate_walk(_spec(method, steps=5, speed=3.0, step_length=0.6, schedule=schedule, end_at_rest=True),
+                         raise_on_failure=False)
+    assert walk.status == "ok", walk.message
+    assert walk.steps[-1].plan.constraints.closing and walk.steps[-1].final_stance_state[4] == pytest.approx(0.0, abs=1e-6)
+
+
 DENSE = [(v, h, rest) for v in (0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.0)
          for h in (1.4, 1.75, 2.1) for rest in (False, True)]
 

@@ -51,6 +51,8 @@ _HOLD_OFFSET = SWING_CONTEXT.index["hold_offset"]
 #: and its name among a solve's fallbacks (summary.json, docs/solvers.md)
 SWING1_CONTINUATION = (0.0, 0.5, 1.0)
 CURVE_P_CONTINUATION = "curve-p-continuation"
+#: the closing stance solved again from no push torque (:meth:`StepController.solve_stance`)
+CLOSING_RESTART = "closing-restart"
 #: Slow steps' stances start on a graded grid (issue #36). Right after heel strike the leg spring
 #: takes the impact and the state changes fastest, for as long whatever the step's duration; where
 #: the uniform stance interval t_step / n is longer than GRADED_STANCE_ABOVE (s; at the default 20
@@ -181,7 +183,22 @@ class StepController:
                                   path_lower=stance_path_bounds(self.tracking, at_rest), optimize=self.tracking,
                                   state_guess=self._tracking_states(at_rest))
         # the closing stance has one more unknown: it must not seed the next walk's stances
-        return self._solve(index, problem, remember=not at_rest)
+        if not at_rest:
+            return self._solve(index, problem)
+        try:
+            return self._solve(index, problem, remember=False)
+        except ConvergenceError:
+            magnitude = names.index("F_theta1_magnitude")
+            if guess[magnitude] == 0.0:
+                raise
+        # A stop right after slowing down at the per-step limit to the slowest walk (3-9 -> 0.5
+        # km/h, then stop at once): from the walking stance's push (-9 N m) plain shooting's
+        # searches do not reach the stop's (+2.8 N m; multiple shooting's Newton does). A stop's
+        # torques are small, so the closing stance starts again from none (docs/envelope.md).
+        solution = self._solve(index, replace(problem, guess=np.where(np.arange(len(names)) == magnitude, 0.0, guess)),
+                               remember=False)
+        solution.fallbacks.insert(0, CLOSING_RESTART)
+        return solution
 
     def _tracking_states(self, at_rest: bool) -> np.ndarray | None:
         """The node states the tracking stance starts from: the previous tracking stance's (IPOPT
