@@ -49,7 +49,7 @@ class ReadyStep:
     dynamics.csv, :func:`klaw_ocp.results.step_table`), ``frames`` (its body frames) and
     ``solve_s`` (the seconds :meth:`StepwiseWalk.next_step` took to make it ready: the next step's
     stance half solved, and this step's swings where they were not solved before, and its frames
-    built)."""
+    finished, or built whole where they were not prepared: :func:`~klaw_ocp.step_body.step_frames`)."""
     index: int
     result: StepResult
     dynamics: dict
