@@ -137,6 +137,18 @@ def test_slowing_at_the_per_step_limits_to_the_slowest_walk_and_stopping_at_once
     assert walk.steps[-1].plan.constraints.closing and walk.steps[-1].final_stance_state[4] == pytest.approx(0.0, abs=1e-6)
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_a_long_step_at_a_middle_cadence_converges_from_a_cold_start(method):
+    # 5 km/h with 1.2 x eq. 1's natural step (0.93 m, 90 steps/min) on the periodic orbit: the first
+    # swing1 from the all-zero guess stalled in multiple shooting (solvers/multiple_shooting_starts.py,
+    # the scan); plain shooting's sweeps and continuation reach the same root
+    walk = simulate_walk(_spec(method, steps=2, speed=5.0, step_length=1.2 * math.sqrt(0.004 * 1.8 * 5000 / 60)),
+                         raise_on_failure=False)
+    assert walk.status == "ok", walk.message
+    swing1 = [s.subphase("swing1").parameters for s in walk.steps]
+    assert swing1[1] == pytest.approx(swing1[0], rel=1e-6)        # the periodic orbit's, step after step
+
+
 DENSE = [(v, h, rest) for v in (0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.0)
          for h in (1.4, 1.75, 2.1) for rest in (False, True)]
 

@@ -32,6 +32,7 @@ import numpy as np
 from .. import choices
 from .integrator import prepare_kernels, subphase_kernels
 from .ipopt_nlp import ipopt_solver
+from .multiple_shooting_starts import SCAN_MAX_FREE, ColdStarts
 from .newton import CONTRACTION, CondensedNewton
 from .problem import IpoptPoint, SubphaseProblem, SubphaseSolution, fd_jacobian, path_bounds
 from .thread_safety import IPOPT_LOCK
@@ -61,7 +62,7 @@ class _Call:
             self.fallbacks.append(fallback)
 
 
-class MultipleShootingSolver:
+class MultipleShootingSolver(ColdStarts):
     """Solve subphases by multiple shooting; see the module docstring for the formulation.
 
     ``nlp``: "auto" (Newton, then IPOPT only if a path inequality is violated), "rootfinder"
@@ -154,37 +155,6 @@ class MultipleShootingSolver:
         """Whether the problem carries node states to start from (the previous step's solution)."""
         return pb.state_guess is not None and np.shape(pb.state_guess) == (self.intervals + 1, pb.spec.nx)
 
-    def _bracket_guess(self, pb, i, u, kernels, tol: float = 1e-4):
-        """One free unknown whose single-shooting residual Newton could not reduce (a trajectory
-        near a kinematic singularity): scan outwards for a sign change, then bisect it."""
-        final = self._final(pb, kernels)
-
-        def f(value):
-            trial = u.copy(); trial[i] = value
-            xs = self._simulate(pb, trial, kernels)
-            return float(final(xs)[0]), trial, xs
-        f0, best_u, best_xs = f(u[i])
-        if not np.isfinite(f0):
-            return u, best_xs
-        scale = abs(pb.scale[i]) or 1.0
-        for k in range(12):
-            for sign in (-1.0, 1.0):
-                b = u[i] + sign * scale * 2.0 ** (k - 2)
-                fb, trial, xs = f(b)
-                if np.isfinite(fb) and fb * f0 <= 0:
-                    a, fa = u[i], f0
-                    for _ in range(200):
-                        m = 0.5 * (a + b)
-                        fm, trial, xs = f(m)
-                        if abs(fm) < tol or abs(b - a) < 1e-15 * max(1.0, abs(m)):
-                            break
-                        if fm * fa <= 0:
-                            b = m
-                        else:
-                            a, fa = m, fm
-                    return trial, xs
-        return best_u, best_xs
-
     def _finish(self, pb, nodes, u, iterations, call: _Call, message, success_hint, kernels,
                 nlp=choices.ROOTFINDER, residual=None) -> SubphaseSolution:
         """The solution from its node states 1..N, checked: residual and defects of the discrete
@@ -240,31 +210,11 @@ class MultipleShootingSolver:
             homotopy = self._homotopy(pb, newton, u0, free, call, result.iterations, kernels)
             if homotopy is not None:
                 return homotopy
+        if not result.success and 2 <= len(free) <= SCAN_MAX_FREE:
+            scanned = self._scan(pb, newton, free, call, result.iterations, kernels)
+            if scanned is not None:
+                return scanned
         return result
-
-    def _homotopy(self, pb, newton, u0, free, call: _Call, iterations: int, kernels, stages: int = 8):
-        """Newton along g(X_N) - (1 - lam) g0 = 0, lam = 1/stages ... 1, from the simulation of
-        the guess (an exact solution at lam = 0: zero defects, final conditions g0).
-
-        A cold start far from the root (the first stance of a 0.5 km/h walk from the all-zero
-        guess: the body falls backwards and the telescope ends metres long) is beyond Newton's
-        reach; every stage of the continuation starts next to its root. The same continuation as
-        plain shooting's homotopy, on the multiple-shooting equations.
-        """
-        call.note("homotopy")
-        xs = self._simulate(pb, u0, kernels)
-        if not np.isfinite(xs).all():
-            return None
-        g0 = self._final(pb, kernels)(xs)
-        u = u0
-        for lam in np.linspace(1 / stages, 1.0, stages):
-            sol = newton.solve(pb.x0, pb.grid, u, free, pb.context, xs, (1 - lam) * g0, simulated=lam == 1 / stages)
-            iterations += sol.iterations
-            if not sol.success:
-                return None
-            xs, u = sol.states, sol.u
-        result = self._finish(pb, xs, u, iterations, call, "", True, kernels)
-        return result if result.success else None
 
     @staticmethod
     def _ipopt_params(pb: SubphaseProblem) -> np.ndarray:

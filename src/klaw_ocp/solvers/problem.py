@@ -197,7 +197,7 @@ class SubphaseSolution:
     #: which algorithm produced it: "rootfinder", "ipopt" or "bisection-secant"
     nlp: str = ""
     #: the fallbacks this solve needed beyond the mode's plain method, in order (docs/solvers.md):
-    #: "bracket", "single-shooting-root", "homotopy", "ipopt-repair" (multiple shooting);
+    #: "bracket", "single-shooting-root", "homotopy", "scan", "ipopt-repair" (multiple shooting);
     #: "swapped-pairing", "broyden", "event-free-start", "homotopy", "recovery-loop" (plain shooting);
     #: the controller's "curve-p-continuation" and "closing-restart" (both) first where it took them
     fallbacks: list = field(default_factory=list)
