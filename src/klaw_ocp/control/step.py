@@ -330,12 +330,25 @@ class StepController:
     def solve_swing1(self, index: int, problem: SubphaseProblem, curve: CurveP) -> SubphaseSolution:
         """Swing1 on curve P; where that fails from the guess (a first step, a change of speed), by
         continuation from the paper's curve with y'(D) = 0, whose knee arrives at t1 at rest: its
-        solution starts the curve half-way to the solved one's slope, that one the curve itself."""
+        solution starts the curve half-way to the solved one's slope, that one the curve itself;
+        where that fails too, or the curve is flat-ended already, with the solver's scan of the
+        unknowns (``scan``, multiple shooting)."""
         try:
             return self._solve(index, problem)
         except ConvergenceError:
-            if curve.end_slope == 0.0:
+            if curve.end_slope == 0.0 and not getattr(self.solver, "scans", False):
                 raise
+        try:
+            if curve.end_slope != 0.0:
+                return self._continued_swing1(index, problem, curve)
+        except ConvergenceError:
+            if not getattr(self.solver, "scans", False):
+                raise
+        # the last resort: the solver's scan of the unknowns about the guess (a first step's swing1
+        # at 1.2-1.4 x the natural step and 3-6 km/h, whose all-zero guess stalls everything else)
+        return self._solve(index, replace(problem, scan=True))
+
+    def _continued_swing1(self, index: int, problem: SubphaseProblem, curve: CurveP) -> SubphaseSolution:
         solution = None
         for share in SWING1_CONTINUATION:
             stage = replace(problem, context=with_curve_p(problem.context, curve.with_end_slope(share)))

@@ -70,6 +70,8 @@ class MultipleShootingSolver(ColdStarts):
     """
 
     name = choices.MULTIPLE_SHOOTING
+    #: it honours a problem's ``scan`` (:meth:`ColdStarts._scan`)
+    scans = True
 
     def __init__(self, intervals: int = choices.DEFAULT_INTERVALS, substeps: int = choices.SUBSTEPS,
                  tolerance: float = choices.DEFAULT_TOLERANCE, max_iterations: int = choices.DEFAULT_MAX_ITERATIONS,
@@ -210,7 +212,7 @@ class MultipleShootingSolver(ColdStarts):
             homotopy = self._homotopy(pb, newton, u0, free, call, result.iterations, kernels)
             if homotopy is not None:
                 return homotopy
-        if not result.success and 2 <= len(free) <= SCAN_MAX_FREE:
+        if not result.success and pb.scan and 2 <= len(free) <= SCAN_MAX_FREE:
             scanned = self._scan(pb, newton, free, call, result.iterations, kernels)
             if scanned is not None:
                 return scanned

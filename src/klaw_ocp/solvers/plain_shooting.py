@@ -40,6 +40,9 @@ class PlainShootingSolver:
     """Forward shooting; see the module docstring. ``max_iterations`` bounds the shots per 1-D solve."""
 
     name = choices.PLAIN_SHOOTING
+    #: no scan of the unknowns' space: its own fallbacks (the sweeps' pairings, Broyden, the
+    #: event-free start, the homotopy) are its last resort
+    scans = False
 
     def __init__(self, intervals: int = choices.DEFAULT_INTERVALS, substeps: int = choices.SUBSTEPS,
                  tolerance: float = choices.DEFAULT_TOLERANCE,

@@ -123,6 +123,9 @@ class SubphaseProblem:
     ``mode``: the event mode forward integration starts in (plain shooting; multiple shooting has
     no events): a swing re-simulates the stance from the lock state the stance is in at its start,
     with ``context`` agreeing (its ``locked`` entry; control/stance_spec.py, ``lock_mode``).
+    ``scan``: where everything else fails, a solver that can (``scans``) may search the unknowns'
+    space about the guess (multiple shooting's ``scan``): the caller's last resort, after its own
+    continuations.
     """
     spec: SubphaseSpec
     x0: np.ndarray
@@ -140,6 +143,7 @@ class SubphaseProblem:
     previous_solution: Optional["SubphaseSolution"] = None
     optimize: bool = False
     mode: dict = field(default_factory=dict)
+    scan: bool = False
 
     def __post_init__(self):
         self.x0 = np.asarray(self.x0, float).ravel()
