@@ -333,17 +333,18 @@ class StepController:
         solution starts the curve half-way to the solved one's slope, that one the curve itself;
         where that fails too, or the curve is flat-ended already, with the solver's scan of the
         unknowns (``scan``, multiple shooting)."""
+        scans = getattr(self.solver, "scans", False)
         try:
             return self._solve(index, problem)
         except ConvergenceError:
-            if curve.end_slope == 0.0 and not getattr(self.solver, "scans", False):
+            if curve.end_slope == 0.0 and not scans:
                 raise
-        try:
-            if curve.end_slope != 0.0:
+        if curve.end_slope != 0.0:
+            try:
                 return self._continued_swing1(index, problem, curve)
-        except ConvergenceError:
-            if not getattr(self.solver, "scans", False):
-                raise
+            except ConvergenceError:
+                if not scans:
+                    raise
         # the last resort: the solver's scan of the unknowns about the guess (a first step's swing1
         # at 1.2-1.4 x the natural step and 3-6 km/h, whose all-zero guess stalls everything else)
         return self._solve(index, replace(problem, scan=True))
