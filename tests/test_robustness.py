@@ -149,6 +149,17 @@ def test_a_long_step_at_a_middle_cadence_converges_from_a_cold_start(method):
     assert swing1[1] == pytest.approx(swing1[0], rel=1e-6)        # the periodic orbit's, step after step
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_a_stop_after_steps_shorter_than_the_natural_one_converges(method):
+    # 2.5 km/h with 0.8 x the natural step, then the closing step: its swing1's knee jumped between
+    # postures on curve P over 0.4 of its short travel; planned again over 0.5 it converges
+    walk = simulate_walk(_spec(method, steps=3, speed=2.5, step_length=0.8 * math.sqrt(0.004 * 1.8 * 2500 / 60),
+                               end_at_rest=True), raise_on_failure=False)
+    assert walk.status == "ok", walk.message
+    closing = walk.steps[-1]
+    assert closing.plan.constraints.closing and closing.subphase("swing1").fallbacks[0] == "closing-longer-curve-p"
+
+
 DENSE = [(v, h, rest) for v in (0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.0)
          for h in (1.4, 1.75, 2.1) for rest in (False, True)]
 

@@ -25,9 +25,9 @@ from .stance_law import PA_KNOTS, STANCE_CONTEXT, STANCE_PARAMETERS
 from .stance_spec import (NO_LOCK_EVENTS, lock_context, lock_mode, stance_fixed,
                           stance_path_bounds, stance_spec, stance_unknowns)
 from .swing_clearance import clearance_retraction
-from .step_stages import (CurveP, DoubleSupport, closing_hip_settle, completed_hind_leg, double_support,
-                          landing_stance_foot, node_at, plan_curve_p, step_pelvis, swing_context, thigh_peak,
-                          with_curve_p)
+from .step_stages import (CLOSING_RETRY_CURVE_P_TRAVEL, MIN_CURVE_P_TRAVEL, CurveP, DoubleSupport, closing_hip_settle,
+                          completed_hind_leg, double_support, landing_stance_foot, node_at, plan_curve_p, step_pelvis,
+                          swing_context, thigh_peak, with_curve_p)
 from .swing_law import SWING_CONTEXT
 from .swing_spec import swing_specs
 # (StepInput, StepResult and the stance notes are read from here too: what a step takes and gives)
@@ -53,6 +53,8 @@ SWING1_CONTINUATION = (0.0, 0.5, 1.0)
 CURVE_P_CONTINUATION = "curve-p-continuation"
 #: the closing stance solved again from no push torque (:meth:`StepController.solve_stance`)
 CLOSING_RESTART = "closing-restart"
+#: a closing step's swing1 on a longer curve P (:meth:`StepController._closing_swings`)
+CLOSING_LONGER_CURVE_P = "closing-longer-curve-p"
 #: Slow steps' stances start on a graded grid (issue #36). Right after heel strike the leg spring
 #: takes the impact and the state changes fastest, for as long whatever the step's duration; where
 #: the uniform stance interval t_step / n is longer than GRADED_STANCE_ABOVE (s; at the default 20
@@ -256,17 +258,18 @@ class StepController:
         node_t1, node_to = node_at(stance.t, t.t_ds + t.t_swing1_end), node_at(stance.t, t.t_ds)
         events = None if stage.at_rest or solved_without_events(stance) else stance.events
 
-        def swings_with(retraction_deg: float):
+        def swings_with(retraction_deg: float, least_travel: float = MIN_CURVE_P_TRAVEL):
             # curve P, the swing foot and the swing context are planned about the thigh's peak
             a_r = a if retraction_deg == a.terminal_swing_retraction else \
                 a.with_overrides({"terminal_swing_retraction": retraction_deg})
-            curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1])
+            curve = plan_curve_p(b, a_r, plan, ds, other_hips[node_t1], other_vels[node_t1], least_travel)
             c = swing_context(b, a_r, self.gains, plan, stance_ctx, stance.parameters, origin, curve, pelvis)
             return self.solve_swings(plan, index, stance.states[node_to], ds, c, events, stance.t[node_to], curve), pelvis, curve, c
         # the swing leg high enough for a foot: the thigh's peak ahead of its landing angle where the ankle would
         # pass lower than l9 (control/swing_clearance.py); a closing step's thigh comes in from behind (thigh_peak)
         (swings, _, curve, c), retraction = (
-            (swings_with(a.terminal_swing_retraction), math.degrees(plan.constraints.theta3 - thigh_peak(a, plan.constraints)))
+            (self._closing_swings(swings_with, a.terminal_swing_retraction),
+             math.degrees(plan.constraints.theta3 - thigh_peak(a, plan.constraints)))
             if stage.at_rest else clearance_retraction(b, swings_with, inp.origin_x, a.terminal_swing_retraction, self.retraction_hint))
         self.retraction_hint = None if inp.stance_standing else retraction     # (a first step's is its own)
         return StepResult(index=index, origin_x=inp.origin_x, hind_ankle_x=inp.hind_ankle_x,
@@ -281,6 +284,20 @@ class StepController:
                           hind_foot=ds.hind_foot, hind_samples=ds.samples, stance_foot=stance_foot,
                           stance_hips=stage.stance_hips, swing_foot=curve.swing_foot, pelvis=pelvis,
                           thigh_retraction_deg=retraction)
+
+    @staticmethod
+    def _closing_swings(swings_with, retraction_deg: float):
+        """A closing step's swings; where swing1 does not converge on its curve P, again on a curve
+        spanning more of the ankle's travel (CLOSING_RETRY_CURVE_P_TRAVEL), noted among swing1's
+        fallbacks."""
+        try:
+            return swings_with(retraction_deg)
+        except ConvergenceError as err:
+            if err.subphase != "swing1":
+                raise
+        swings, *rest = swings_with(retraction_deg, CLOSING_RETRY_CURVE_P_TRAVEL)
+        swings[0].fallbacks.insert(0, CLOSING_LONGER_CURVE_P)
+        return (swings, *rest)
 
     def solve_swings(self, plan, index: int, x_to: np.ndarray, ds: DoubleSupport, c: np.ndarray,
                      stance_events, t_toe_off: float, curve: CurveP) -> list[SubphaseSolution]:

@@ -82,6 +82,15 @@ CLOSING_APPROACH_DEG = 4.0
 #: Spread over 0.8 D the descent stays clear of it: ∂g/∂θ4 ≥ 0.05 and the ankle on the curve to
 #: 2e-5 mm on the grid's closing steps; 0.15 D failed to converge in some steps.
 CLOSING_CURVE_P_PEAK = 0.2
+#: A closing step whose swing1 does not converge on its curve P is planned again with the curve
+#: spanning at least this fraction of the ankle's travel to its landing point (MIN_CURVE_P_TRAVEL,
+#: 0.4, first). A stop after steps shorter than the natural one at 2.5-5 km/h (0.7-0.8 ×) has a
+#: short travel, and its descent over 0.4 of it met the direction the knee moves the ankle again:
+#: swing1's knee jumped between postures from one torque to the next and neither mode converged
+#: (docs/envelope.md). At 0.5 every one of them converges. Not the first try: on the envelope grid
+#: the longer curve raised the closing steps' swing hip torque at 2.5-4.5 km/h by up to 55 % (90 to
+#: 139 N m, a 2.0 m body at 3 km/h) and took plain shooting through more fallbacks.
+CLOSING_RETRY_CURVE_P_TRAVEL = 0.5
 #: Swing1's knee follows curve P through a Baumgarte term: the ankle's height error decays at this
 #: rate (1/s), a time constant of 20 ms, short against swing1's 0.1-0.2 s.
 CURVE_P_BAUMGARTE = 50.0
@@ -259,10 +268,12 @@ def thigh_peak(attrs, constraints) -> float:
     return constraints.theta3 - math.radians(attrs.terminal_swing_retraction)
 
 
-def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray, hip_vel_t1: np.ndarray) -> CurveP:
+def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray, hip_vel_t1: np.ndarray,
+                 least_travel: float = MIN_CURVE_P_TRAVEL) -> CurveP:
     """Curve P from the toe-off ankle to the ankle with the toe under the knee at t1, the thigh at
     its peak (:func:`thigh_peak`); the foot reaches its heel-strike angles by t1, dorsiflexing
-    further if the toe needs it."""
+    further if the toe needs it. It spans at least ``least_travel`` of the ankle's travel from
+    toe-off to its landing point."""
     b, a, t, con = body, attrs, plan.timings, plan.constraints
     t_to, t1, t2 = t.t_ds, t.t_ds + t.t_swing1_end, t.t_ds + t.t_swing2_end
     theta5_hs, theta6_hs = math.radians(a.theta5_impact), math.radians(a.theta6_impact)
@@ -272,7 +283,7 @@ def plan_curve_p(body: Body, attrs, plan, ds: DoubleSupport, hip_t1: np.ndarray,
                                                 a.toe_clearance + TOE_MARGIN_AT_T1_REL * b.l1)
     a0, x0 = ds.ankle_toe_off[1], ds.ankle_toe_off[0]
     a_min = ankle_t1[1]
-    d_travel = max(ankle_t1[0] - x0, MIN_CURVE_P_TRAVEL * (con.next_ankle_x - x0))
+    d_travel = max(ankle_t1[0] - x0, least_travel * (con.next_ankle_x - x0))
     a_max = max(b.l1 * (a.ankle_peak_height_rel - a.ankle_peak_height_speed_slope * plan.parameters.speed_kmh),
                 max(a0, a_min) + max(CURVE_P_PEAK_MARGIN_REL * b.l1, CURVE_P_PEAK_MARGIN_TRAVEL * d_travel))
     peak = (min(a.swing_peak_position, CLOSING_CURVE_P_PEAK) if con.closing else a.swing_peak_position) * d_travel

@@ -203,7 +203,8 @@ class SubphaseSolution:
     #: the fallbacks this solve needed beyond the mode's plain method, in order (docs/solvers.md):
     #: "bracket", "single-shooting-root", "homotopy", "scan", "ipopt-repair" (multiple shooting);
     #: "swapped-pairing", "broyden", "event-free-start", "homotopy", "recovery-loop" (plain shooting);
-    #: the controller's "curve-p-continuation" and "closing-restart" (both) first where it took them
+    #: the controller's "curve-p-continuation", "closing-restart" and "closing-longer-curve-p" (both)
+    #: first where it took them
     fallbacks: list = field(default_factory=list)
     #: one-off CasADi build time (s) spent in this call, not counted in ``wall_s``
     build_s: float = 0.0
